@@ -1,0 +1,149 @@
+"""Validation of measured data: the one place where user arrays are checked.
+
+Every public entry point that takes data calls :func:`as_trajectories`, which
+turns ``x`` (one ``(m, n)`` array or a list of them), ``t`` (a step or an array
+of times), ``u`` and ``x_dot`` into a list of :class:`Trajectory` with float64
+arrays, or raises a :mod:`discrepancy.errors` exception naming the argument.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DataError, ShapeError, describe
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """One measured trajectory.
+
+    Attributes:
+        t: times, shape ``(m,)``, strictly increasing (s or the user's time unit).
+        x: states, shape ``(m, n)``.
+        u: inputs, shape ``(m, r)``, or ``None``.
+        x_dot: measured state derivatives, shape ``(m, n)``, or ``None``.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray | None = None
+    x_dot: np.ndarray | None = None
+
+    @property
+    def n_samples(self) -> int:
+        return self.x.shape[0]
+
+
+def check_finite(name: str, a: np.ndarray) -> None:
+    """Raise DataError naming the first non-finite entry (row, column) of ``a``."""
+    if not np.all(np.isfinite(a)):
+        bad = np.argwhere(~np.isfinite(a))[0]
+        where = ", ".join(str(int(i)) for i in bad)
+        raise DataError(
+            f"{name} must be finite; found {a[tuple(bad)]} at index ({where}) "
+            f"({np.count_nonzero(~np.isfinite(a))} non-finite values in all)"
+        )
+
+
+def as_2d(name: str, a, *, n_rows: int | None = None, n_cols: int | None = None,
+          allow_1d: bool = False) -> np.ndarray:
+    """Float64 2-D array from ``a`` with optional row/column counts, else ShapeError."""
+    try:
+        arr = np.asarray(a, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ShapeError(f"{name} must be a numeric array; got {describe(a)} ({e})") from None
+    if arr.ndim == 1 and allow_1d:
+        arr = arr[:, None]
+    if arr.ndim != 2:
+        hint = " (use a.reshape(-1, 1) for a single variable)" if arr.ndim == 1 else ""
+        raise ShapeError(f"{name} must be 2-D (samples, variables); got shape {arr.shape}{hint}")
+    if n_rows is not None and arr.shape[0] != n_rows:
+        raise ShapeError(f"{name} must have {n_rows} rows (one per sample of x); "
+                         f"got shape {arr.shape}")
+    if n_cols is not None and arr.shape[1] != n_cols:
+        raise ShapeError(f"{name} must have {n_cols} columns; got shape {arr.shape}")
+    check_finite(name, arr)
+    return arr
+
+
+def as_times(name: str, t, m: int) -> np.ndarray:
+    """Times of ``m`` samples from a positive step or a strictly increasing array."""
+    if np.isscalar(t) or np.ndim(t) == 0:
+        dt = float(t)
+        if not np.isfinite(dt) or dt <= 0:
+            raise DataError(f"{name} as a time step must be a positive finite number; got {dt}")
+        return np.arange(m) * dt
+    times = np.asarray(t, dtype=float)
+    if times.ndim != 1 or times.shape[0] != m:
+        raise ShapeError(f"{name} must be a step or a 1-D array of {m} times (one per row of x); "
+                         f"got shape {times.shape}")
+    check_finite(name, times)
+    steps = np.diff(times)
+    if np.any(steps <= 0):
+        i = int(np.argmax(steps <= 0))
+        raise DataError(f"{name} must be strictly increasing; t[{i + 1}] = {times[i + 1]} "
+                        f"follows t[{i}] = {times[i]}")
+    return times
+
+
+def _as_list(name: str, value, k: int, *, broadcast: bool):
+    if isinstance(value, (list, tuple)):
+        if len(value) != k:
+            raise ShapeError(f"{name} must be a list of {k} items (one per trajectory of x); "
+                             f"got {len(value)}")
+        return list(value)
+    if broadcast or k == 1:
+        return [value] * k
+    raise ShapeError(f"{name} must be a list of {k} arrays when x is a list of trajectories; "
+                     f"got {describe(value)}")
+
+
+def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
+    """Validate data and return a list of trajectories.
+
+    Args:
+        x: states, ``(m, n)`` array or list of such arrays (several trajectories,
+            never differentiated across their joins). All must have the same ``n``.
+        t: time step (float > 0) or times ``(m,)``, or a list of those per trajectory.
+            ``None`` means a unit step.
+        u: inputs ``(m, r)`` (or ``(m,)`` for one input), or a list per trajectory.
+        x_dot: measured derivatives ``(m, n)``, or a list per trajectory.
+    """
+    xs = list(x) if isinstance(x, (list, tuple)) else [x]
+    if not xs:
+        raise ShapeError("x must hold at least one trajectory; got an empty list")
+    k = len(xs)
+    ts = _as_list("t", 1.0 if t is None else t, k, broadcast=np.ndim(t) == 0)
+    us = _as_list("u", u, k, broadcast=u is None)
+    xds = _as_list("x_dot", x_dot, k, broadcast=x_dot is None)
+    out, n, r = [], None, None
+    for i in range(k):
+        tag = "" if k == 1 else f"[{i}]"
+        xi = as_2d(f"x{tag}", xs[i])
+        if n is None:
+            n = xi.shape[1]
+        elif xi.shape[1] != n:
+            raise ShapeError(f"every trajectory in x must have {n} state columns like x[0]; "
+                             f"x{tag} has shape {xi.shape}")
+        m = xi.shape[0]
+        if m < 2:
+            raise ShapeError(f"x{tag} must have at least 2 samples; got shape {xi.shape}")
+        ti = as_times(f"t{tag}", ts[i], m)
+        ui = None if us[i] is None else as_2d(f"u{tag}", us[i], n_rows=m, allow_1d=True)
+        if ui is not None:
+            if r is None:
+                r = ui.shape[1]
+            elif ui.shape[1] != r:
+                raise ShapeError(f"every u must have {r} input columns; u{tag} has {ui.shape}")
+        if (ui is None) != (us[0] is None):
+            raise ShapeError(f"u must be given for all trajectories or none; u{tag} differs")
+        xdi = None if xds[i] is None else as_2d(f"x_dot{tag}", xds[i], n_rows=m, n_cols=n)
+        out.append(Trajectory(ti, xi, ui, xdi))
+    return out
+
+
+def is_uniform(t: np.ndarray, rtol: float = 1e-6) -> bool:
+    """True when the steps of ``t`` are equal to within ``rtol`` of the mean step."""
+    steps = np.diff(t)
+    return bool(np.all(np.abs(steps - steps.mean()) <= rtol * abs(steps.mean())))

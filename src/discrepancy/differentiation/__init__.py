@@ -1,0 +1,6 @@
+"""Numerical differentiation: one registry behind one interface."""
+from .base import Differentiator, available_methods, get_differentiation_method
+from .methods import FiniteDifference, Kalman, SavitzkyGolay, Spline, TrendFiltered
+
+__all__ = ["Differentiator", "FiniteDifference", "Kalman", "SavitzkyGolay", "Spline",
+           "TrendFiltered", "available_methods", "get_differentiation_method"]

@@ -1,0 +1,92 @@
+"""Base class and registry of differentiation methods.
+
+A method maps samples ``x`` ``(m, n)`` at times ``t`` ``(m,)`` to
+``(x_smooth, x_dot)``, both ``(m, n)``. ``x_smooth`` is what the library
+evaluates Θ on (the paper smooths x with Savitzky–Golay and uses the smoothed
+x); methods that do not smooth return ``x`` unchanged.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from ..data.trajectory import is_uniform
+from ..errors import DataError, ShapeError, UnknownNameError
+
+
+class Differentiator(ABC):
+    """Estimate time derivatives of sampled trajectories.
+
+    Subclasses implement :meth:`_compute` and set ``uniform_only``.
+    ``halo`` is the number of neighbouring samples on each side a derivative
+    depends on (used to stitch chunks exactly); ``None`` means global methods.
+    """
+
+    uniform_only: bool = False
+
+    @property
+    def min_samples(self) -> int:
+        return 3
+
+    @property
+    def halo(self) -> int | None:
+        return None
+
+    def __call__(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(x_smooth, x_dot)``, each ``(m, n)``, for ``x`` ``(m, n)`` at ``t`` ``(m,)``."""
+        x = np.asarray(x, dtype=float)
+        t = np.asarray(t, dtype=float)
+        if x.ndim != 2 or t.shape != (x.shape[0],):
+            raise ShapeError(f"x must be (m, n) with t of shape (m,); got x {x.shape}, t {t.shape}")
+        if x.shape[0] < self.min_samples:
+            raise ShapeError(f"x has {x.shape[0]} samples, fewer than the {self.min_samples} that "
+                             f"{self!r} needs (its window); give a longer trajectory or a "
+                             "smaller window")
+        if self.uniform_only and not is_uniform(t):
+            raise DataError(f"{type(self).__name__} needs uniformly spaced t, but the steps of t "
+                            f"range over [{np.diff(t).min():.6g}, {np.diff(t).max():.6g}]; "
+                            "use FiniteDifference() or Spline(), which accept non-uniform t")
+        x_smooth, x_dot = self._compute(x, t)
+        return np.ascontiguousarray(x_smooth), np.ascontiguousarray(x_dot)
+
+    @abstractmethod
+    def _compute(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Hook: smoothed x and its derivative, each (m, n)."""
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in vars(self).items() if not k.startswith("_"))
+        return f"{type(self).__name__}({args})"
+
+
+_REGISTRY: dict[str, type[Differentiator]] = {}
+
+
+def register(name: str):
+    """Class decorator adding a differentiation method to the registry under ``name``."""
+    def add(cls):
+        _REGISTRY[name] = cls
+        return cls
+    return add
+
+
+def available_methods() -> list[str]:
+    return sorted(_REGISTRY)
+
+
+def get_differentiation_method(method=None, **kwargs) -> Differentiator:
+    """A Differentiator from an instance, a registered name (with kwargs) or ``None`` (default).
+
+    The default is second-order centred finite differences, as in PySINDy.
+    """
+    if method is None:
+        method = "finite_difference"
+    if isinstance(method, Differentiator):
+        return method
+    if isinstance(method, str):
+        if method not in _REGISTRY:
+            raise UnknownNameError(f"differentiation_method {method!r} is not known; valid names: "
+                                   f"{', '.join(available_methods())}")
+        return _REGISTRY[method](**kwargs)
+    raise UnknownNameError("differentiation_method must be a Differentiator or one of "
+                           f"{', '.join(available_methods())}; got {type(method).__name__}")

@@ -1,0 +1,57 @@
+"""Exceptions raised by discrepancy.
+
+Every error is a :class:`DiscrepancyError` and also a subclass of the builtin
+exception a Python user would expect (``ValueError`` for bad values,
+``RuntimeError`` for solver failures), so ``except ValueError`` keeps working.
+Messages name the argument, what was expected and what was given.
+"""
+
+
+class DiscrepancyError(Exception):
+    """Base class of every error raised on purpose by this package."""
+
+
+class ShapeError(DiscrepancyError, ValueError):
+    """An array has the wrong number of dimensions, rows or columns."""
+
+
+class DataError(DiscrepancyError, ValueError):
+    """Data values are unusable: NaN/inf, non-increasing times, implausible ranges."""
+
+
+class ParameterError(DiscrepancyError, ValueError):
+    """A constructor or method argument is out of its valid range."""
+
+
+class UnknownNameError(DiscrepancyError, ValueError):
+    """A name (method, variable, dataset) is not one of the valid ones."""
+
+
+class NotFittedError(DiscrepancyError, AttributeError):
+    """A method that needs a fitted model was called before ``fit``."""
+
+
+class PriorError(DiscrepancyError, ValueError):
+    """The prior model f_m returned something unusable (wrong shape, NaN)."""
+
+
+class ModelFileError(DiscrepancyError, ValueError):
+    """A model file is not valid JSON of a known version, or was tampered with."""
+
+
+class ExportError(DiscrepancyError, ValueError):
+    """A model cannot be exported to the requested form (e.g. a numpy-only term to CasADi)."""
+
+
+class ConvergenceError(DiscrepancyError, RuntimeError):
+    """A solver (ODE, optimiser, IPOPT) did not reach a valid solution."""
+
+
+def describe(value) -> str:
+    """Short description of a value for error messages: type and shape, never its content."""
+    shape = getattr(value, "shape", None)
+    if shape is not None:
+        return f"{type(value).__name__} of shape {tuple(shape)}"
+    if isinstance(value, (list, tuple)):
+        return f"{type(value).__name__} of length {len(value)}"
+    return repr(value) if isinstance(value, (int, float, str, type(None))) else type(value).__name__

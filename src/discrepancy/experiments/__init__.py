@@ -1,0 +1,26 @@
+"""Paper examples: each writes figures, ``report.md`` and ``results.json`` to ``DIR/NAME/``.
+
+Every entry maps an experiment name to ``(module, function)``; the function has the
+signature ``run(out_dir, *, quick=False) -> pathlib.Path`` (the folder it wrote).
+``quick=True`` runs a reduced version (fewer seeds) for tests.
+"""
+from importlib import import_module
+
+EXPERIMENTS = {
+    "vdp-parameter": ("van_der_pol", "run_parameter"),
+    "vdp-structure": ("van_der_pol", "run_structure"),
+    "pendulum-energy": ("pendulum_energy", "run_synthetic"),
+    "pendulum-energy-experiment": ("pendulum_energy", "run_experiment"),
+    "cart-swingup": ("cart_swingup", "run"),
+}
+
+
+def get_experiment(name: str):
+    """The ``run`` function of experiment ``name``."""
+    from ..errors import UnknownNameError
+
+    if name not in EXPERIMENTS:
+        raise UnknownNameError(f"experiment {name!r} is not known; valid names: "
+                               f"{', '.join(EXPERIMENTS)}")
+    module, function = EXPERIMENTS[name]
+    return getattr(import_module(f".{module}", __name__), function)

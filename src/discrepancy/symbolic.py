@@ -1,0 +1,219 @@
+"""Sympy expressions as the single source of truth for every term.
+
+Three conversions live here, each a plain tree walk over a whitelist of node
+types, so nothing is ever passed to ``eval``/``exec``/``sympify``:
+
+* :func:`compile_numpy` turns an expression into a vectorised numpy callable
+  (``sympy.lambdify`` would generate and ``exec`` source code, which we refuse
+  for expressions read back from model files);
+* :func:`to_data` / :func:`from_data` turn an expression into nested JSON lists
+  and back (model files);
+* :func:`to_casadi` maps an expression onto CasADi symbols (exact export).
+"""
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+import sympy as sp
+
+from .errors import ExportError, ModelFileError
+
+IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+# name -> (sympy constructor, numpy function, casadi function name)
+FUNCTIONS: dict[str, tuple[Callable, Callable, str | None]] = {
+    "sin": (sp.sin, np.sin, "sin"), "cos": (sp.cos, np.cos, "cos"),
+    "tan": (sp.tan, np.tan, "tan"), "exp": (sp.exp, np.exp, "exp"),
+    "log": (sp.log, np.log, "log"), "tanh": (sp.tanh, np.tanh, "tanh"),
+    "sinh": (sp.sinh, np.sinh, "sinh"), "cosh": (sp.cosh, np.cosh, "cosh"),
+    "atan": (sp.atan, np.arctan, "atan"), "asin": (sp.asin, np.arcsin, "asin"),
+    "acos": (sp.acos, np.arccos, "acos"), "Abs": (sp.Abs, np.abs, "fabs"),
+    "sign": (sp.sign, np.sign, "sign"),
+}
+
+
+def symbol(name: str) -> sp.Symbol:
+    """The real symbol used for a variable name everywhere in the package."""
+    return sp.Symbol(name, real=True)
+
+
+def _number(expr) -> float:
+    return float(expr)
+
+
+def compile_numpy(expr: sp.Expr, names: Sequence[str],
+                  functions: Mapping[str, Callable] | None = None) -> Callable[[np.ndarray], np.ndarray]:
+    """Vectorised evaluator of ``expr``: ``f(Z)`` with ``Z`` ``(m, len(names))`` -> ``(m,)``.
+
+    ``functions`` maps names of undefined sympy functions (user numpy terms)
+    to numpy callables.
+    """
+    index = {n: i for i, n in enumerate(names)}
+    functions = dict(functions or {})
+
+    def build(e):
+        if e.is_Symbol:
+            if e.name not in index:
+                raise ExportError(f"expression uses variable {e.name!r}, not one of {list(names)}")
+            i = index[e.name]
+            return lambda Z: Z[:, i]
+        if e.is_number:
+            c = _number(e)
+            return lambda Z: np.full(Z.shape[0], c)
+        args = [build(a) for a in e.args]
+        if e.is_Add:
+            return lambda Z: _reduce(np.add, args, Z)
+        if e.is_Mul:
+            return lambda Z: _reduce(np.multiply, args, Z)
+        if e.is_Pow:
+            base, ex = args[0], e.args[1]
+            if ex.is_Integer and int(ex) == 2:
+                return lambda Z: np.square(base(Z))
+            if ex.is_number:
+                p = _number(ex)
+                return lambda Z: np.power(base(Z), p)
+            return lambda Z: np.power(base(Z), args[1](Z))
+        name = type(e).__name__
+        if name in FUNCTIONS:
+            f = FUNCTIONS[name][1]
+            return lambda Z: f(args[0](Z))
+        if isinstance(e, sp.core.function.AppliedUndef) and name in functions:
+            f = functions[name]
+            return lambda Z: np.asarray(f(*[a(Z) for a in args]), dtype=float)
+        raise ExportError(f"cannot evaluate {e} numerically: {name} is not a supported function "
+                          f"(supported: {', '.join(sorted(FUNCTIONS))}, or user functions "
+                          f"{sorted(functions)})")
+
+    return build(sp.sympify(expr) if not isinstance(expr, sp.Basic) else expr)
+
+
+def _reduce(op, fs, Z):
+    out = fs[0](Z)
+    for f in fs[1:]:
+        out = op(out, f(Z))
+    return out
+
+
+def to_data(expr: sp.Expr):
+    """Nested JSON-compatible lists for ``expr``: ``["sym", name]``, ``["num", p, q]``,
+    ``["float", value]``, ``["add", ...]``, ``["mul", ...]``, ``["pow", b, e]``, ``["fn", name, ...]``."""
+    if expr.is_Symbol:
+        return ["sym", expr.name]
+    if expr.is_Rational:
+        return ["num", int(expr.p), int(expr.q)]
+    if expr.is_Float or expr.is_number and not expr.args:
+        return ["float", float(expr)]
+    if expr.is_Add:
+        return ["add", *[to_data(a) for a in expr.args]]
+    if expr.is_Mul:
+        return ["mul", *[to_data(a) for a in expr.args]]
+    if expr.is_Pow:
+        return ["pow", to_data(expr.args[0]), to_data(expr.args[1])]
+    name = type(expr).__name__
+    if name in FUNCTIONS or isinstance(expr, sp.core.function.AppliedUndef):
+        return ["fn", name, *[to_data(a) for a in expr.args]]
+    if expr.is_number:
+        return ["float", float(expr)]
+    raise ExportError(f"cannot store expression {expr}: node type {name} is not supported")
+
+
+def from_data(data, *, where: str = "expression", depth: int = 0) -> sp.Expr:
+    """Rebuild an expression from :func:`to_data` output, refusing anything else."""
+    def bad(why):
+        return ModelFileError(f"{where}: {why}; the model file is corrupted or was edited")
+    if depth > 64:
+        raise bad("expression nested too deeply")
+    if not isinstance(data, list) or not data or not isinstance(data[0], str):
+        raise bad(f"expected a list starting with a node name, got {type(data).__name__}")
+    tag, args = data[0], data[1:]
+
+    def sub(a):
+        return from_data(a, where=where, depth=depth + 1)
+
+    if tag == "sym":
+        if len(args) != 1 or not isinstance(args[0], str) or not IDENTIFIER.match(args[0]):
+            raise bad(f"symbol name must be an identifier, got {args!r:.60}")
+        return symbol(args[0])
+    if tag == "num":
+        if len(args) != 2 or not all(isinstance(a, int) and not isinstance(a, bool) for a in args) \
+                or args[1] == 0:
+            raise bad(f"rational must be two integers with q != 0, got {args!r:.60}")
+        return sp.Rational(args[0], args[1])
+    if tag == "float":
+        if len(args) != 1 or not isinstance(args[0], (int, float)) or not np.isfinite(args[0]):
+            raise bad(f"float must be one finite number, got {args!r:.60}")
+        return sp.Float(args[0])
+    if tag in ("add", "mul"):
+        if len(args) < 2:
+            raise bad(f"{tag} needs at least two operands")
+        parts = [sub(a) for a in args]
+        return sp.Add(*parts) if tag == "add" else sp.Mul(*parts)
+    if tag == "pow":
+        if len(args) != 2:
+            raise bad("pow needs a base and an exponent")
+        return sp.Pow(sub(args[0]), sub(args[1]))
+    if tag == "fn":
+        if not args or not isinstance(args[0], str) or not IDENTIFIER.match(args[0]):
+            raise bad(f"function name must be an identifier, got {args[:1]!r:.60}")
+        name, fargs = args[0], [sub(a) for a in args[1:]]
+        if name in FUNCTIONS:
+            if len(fargs) != 1:
+                raise bad(f"{name} takes one argument, got {len(fargs)}")
+            return FUNCTIONS[name][0](fargs[0])
+        return sp.Function(name)(*fargs)
+    raise bad(f"unknown node {tag!r:.40}")
+
+
+def to_casadi(expr: sp.Expr, variables: Mapping[str, object], *, term: str | None = None):
+    """The CasADi expression of ``expr`` with symbols replaced by ``variables[name]`` (SX/MX)."""
+    import casadi as ca
+
+    def build(e):
+        if e.is_Symbol:
+            return variables[e.name]
+        if e.is_number:
+            return _number(e)
+        args = [build(a) for a in e.args]
+        if e.is_Add:
+            out = args[0]
+            for a in args[1:]:
+                out = out + a
+            return out
+        if e.is_Mul:
+            out = args[0]
+            for a in args[1:]:
+                out = out * a
+            return out
+        if e.is_Pow:
+            return args[0] ** args[1]
+        name = type(e).__name__
+        if name in FUNCTIONS and FUNCTIONS[name][2]:
+            return getattr(ca, FUNCTIONS[name][2])(args[0])
+        raise ExportError(f"term {term or e} cannot be exported to CasADi: {name} is a "
+                          "numpy-only function with no symbolic form; use sympy expressions "
+                          "(e.g. CustomLibrary(expressions=[...])) for terms you want to export")
+
+    return build(expr)
+
+
+class _NamePrinter(sp.printing.str.StrPrinter):
+    """PySINDy-style names: ``x1^2 x2``, ``sin(x1)``, ``sin(x1) u``."""
+
+    def _print_Mul(self, expr):
+        coeff, factors = expr.as_coeff_mul()
+        body = " ".join(self._print(f) if not f.is_Add else f"({self._print(f)})" for f in factors)
+        return body if coeff == 1 else f"{self._print(coeff)} {body}"
+
+    def _print_Pow(self, expr):
+        base, ex = expr.args
+        b = self._print(base)
+        if not (base.is_Symbol or base.is_Function):
+            b = f"({b})"
+        return f"{b}^{self._print(ex)}"
+
+
+def feature_name(expr: sp.Expr) -> str:
+    """Readable name of a library column, e.g. ``x1^2 x2``."""
+    return _NamePrinter().doprint(expr)
