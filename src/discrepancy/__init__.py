@@ -1,2 +1,30 @@
-"""discrepancy: learn sparse discrepancy models that correct first-principles models."""
+"""discrepancy: learn sparse, interpretable discrepancy models g(x, u) that correct a
+first-principles model f_m(x, u), so that f_m + g predicts the real system.
+
+Quick start::
+
+    import discrepancy as dc
+    model = dc.DiscrepancyModel(prior=f_m, feature_library=dc.PolynomialLibrary(degree=3),
+                                optimizer=dc.STLSQ(threshold=0.05),
+                                differentiation_method=dc.SavitzkyGolay(window_length=21))
+    model.fit(x, t=0.01).print()
+"""
 __version__ = "0.1.0"
+
+from . import errors, systems
+from .differentiation import (
+    FiniteDifference,
+    Kalman,
+    SavitzkyGolay,
+    Spline,
+    TrendFiltered,
+)
+from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
+from .models import DiscrepancyModel, load_model
+from .optimizers import STLSQ, GramStatistics, Lasso
+
+__all__ = [
+    "CustomLibrary", "DiscrepancyModel", "FiniteDifference", "FourierLibrary", "GramStatistics",
+    "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "Spline", "TrendFiltered",
+    "errors", "load_model", "systems",
+]

@@ -199,10 +199,19 @@ def to_casadi(expr: sp.Expr, variables: Mapping[str, object], *, term: str | Non
 
 
 class _NamePrinter(sp.printing.str.StrPrinter):
-    """PySINDy-style names: ``x1^2 x2``, ``sin(x1)``, ``sin(x1) u``."""
+    """PySINDy-style names: ``x1^2 x2``, ``sin(x1)``, ``sin(x1) u``; factors in variable order."""
+
+    def __init__(self, names: Sequence[str] = ()):
+        super().__init__()
+        self._rank = {n: i for i, n in enumerate(names)}
+
+    def _key(self, factor):
+        ranks = [self._rank.get(s.name, len(self._rank)) for s in factor.free_symbols]
+        return (min(ranks, default=-1), not (factor.is_Symbol or factor.is_Pow), str(factor))
 
     def _print_Mul(self, expr):
         coeff, factors = expr.as_coeff_mul()
+        factors = sorted(factors, key=self._key)
         body = " ".join(self._print(f) if not f.is_Add else f"({self._print(f)})" for f in factors)
         return body if coeff == 1 else f"{self._print(coeff)} {body}"
 
@@ -214,6 +223,6 @@ class _NamePrinter(sp.printing.str.StrPrinter):
         return f"{b}^{self._print(ex)}"
 
 
-def feature_name(expr: sp.Expr) -> str:
-    """Readable name of a library column, e.g. ``x1^2 x2``."""
-    return _NamePrinter().doprint(expr)
+def feature_name(expr: sp.Expr, names: Sequence[str] = ()) -> str:
+    """Readable name of a library column, e.g. ``x1^2 x2``; factors ordered as ``names``."""
+    return _NamePrinter(names).doprint(expr)

@@ -1,0 +1,8 @@
+"""Candidate-function libraries Θ(x, u)."""
+from .base import BaseLibrary, ConcatLibrary, FeatureLibrary, TensorLibrary
+from .custom import CustomLibrary
+from .fourier import FourierLibrary
+from .polynomial import PolynomialLibrary
+
+__all__ = ["BaseLibrary", "ConcatLibrary", "CustomLibrary", "FeatureLibrary", "FourierLibrary",
+           "PolynomialLibrary", "TensorLibrary"]

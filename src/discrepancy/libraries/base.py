@@ -1,0 +1,177 @@
+"""Feature libraries Θ(z) on the variables z = [x, u].
+
+Every column carries its sympy expression, so a fitted model is an exact formula.
+Libraries compose: ``a + b`` concatenates columns, ``a * b`` forms all products
+(``sin(x) * u``); duplicate columns (same expression) are dropped once, so a
+composite library never has two identical columns.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+
+import numpy as np
+import sympy as sp
+
+from ..errors import NotFittedError, ParameterError, ShapeError, UnknownNameError
+from ..symbolic import feature_name, symbol
+
+
+class FeatureLibrary(ABC):
+    """Base of all libraries: ``fit(names)`` then ``transform(Z)``.
+
+    ``fit`` takes the names of all variables ``z = [states..., inputs...]`` and
+    sets ``feature_expressions_`` (list of sympy expressions, one per column)
+    and ``n_features_``. ``transform`` maps ``Z`` ``(m, len(names))`` to Θ
+    ``(m, n_features_)``.
+    """
+
+    def __add__(self, other: FeatureLibrary) -> FeatureLibrary:
+        return ConcatLibrary([self, other])
+
+    def __mul__(self, other: FeatureLibrary) -> FeatureLibrary:
+        return TensorLibrary(self, other)
+
+    @abstractmethod
+    def fit(self, names: Sequence[str]) -> FeatureLibrary:
+        """Bind the library to variable names; returns self."""
+
+    @abstractmethod
+    def _transform(self, Z: np.ndarray) -> np.ndarray:
+        """Hook: Θ for validated ``Z``."""
+
+    def transform(self, Z: np.ndarray) -> np.ndarray:
+        """Θ ``(m, n_features_)`` for ``Z`` ``(m, n_variables)`` (float64, finite)."""
+        if not hasattr(self, "feature_expressions_"):
+            raise NotFittedError(f"{type(self).__name__}.transform called before fit(names)")
+        Z = np.asarray(Z, dtype=float)
+        if Z.ndim != 2 or Z.shape[1] != len(self.names_):
+            raise ShapeError(f"Z must be (m, {len(self.names_)}) for variables {self.names_}; "
+                             f"got shape {Z.shape}")
+        return self._transform(Z)
+
+    def user_functions(self) -> dict:
+        """Numpy functions of the library's custom terms, by name (empty for exact terms)."""
+        return {}
+
+    def get_feature_names(self) -> list[str]:
+        if not hasattr(self, "feature_expressions_"):
+            raise NotFittedError(f"{type(self).__name__}.get_feature_names called before fit")
+        return [feature_name(e, self.names_) for e in self.feature_expressions_]
+
+    def _bind(self, names: Sequence[str], expressions: list[sp.Expr]) -> None:
+        if not expressions:
+            raise ParameterError(f"{self!r} produces no features for variables {list(names)}; "
+                                 "the library must have at least one column")
+        self.names_ = list(names)
+        self.feature_expressions_ = expressions
+        self.n_features_ = len(expressions)
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in vars(self).items()
+                         if not k.startswith("_") and not k.endswith("_"))
+        return f"{type(self).__name__}({args})"
+
+
+class BaseLibrary(FeatureLibrary):
+    """A library acting on a chosen subset of the variables.
+
+    Args:
+        variables: names or indices (into z = [x, u]) the library acts on; ``None`` = all.
+    """
+
+    def __init__(self, *, variables: Sequence[str | int] | None = None):
+        self.variables = variables
+
+    def _select(self, names: Sequence[str]) -> list[int]:
+        if self.variables is None:
+            return list(range(len(names)))
+        chosen = []
+        for v in self.variables:
+            if isinstance(v, (int, np.integer)) and 0 <= v < len(names):
+                chosen.append(int(v))
+            elif isinstance(v, str) and v in names:
+                chosen.append(list(names).index(v))
+            else:
+                raise UnknownNameError(f"variables of {type(self).__name__} must be names or "
+                                       f"indices of {list(names)}; got {v!r}")
+        return chosen
+
+    def fit(self, names: Sequence[str]) -> BaseLibrary:
+        self._index = self._select(names)
+        symbols = [symbol(names[i]) for i in self._index]
+        self._bind(names, self._expressions(symbols))
+        return self
+
+    def _transform(self, Z):
+        return self._evaluate(Z[:, self._index])
+
+    @abstractmethod
+    def _expressions(self, symbols: list[sp.Symbol]) -> list[sp.Expr]:
+        """Hook: the column expressions for the selected variables."""
+
+    @abstractmethod
+    def _evaluate(self, Zs: np.ndarray) -> np.ndarray:
+        """Hook: the columns for the selected variables ``Zs`` (m, k)."""
+
+
+def _unique(expressions: list[sp.Expr]) -> list[int]:
+    seen, keep = set(), []
+    for i, e in enumerate(expressions):
+        if e not in seen:
+            seen.add(e)
+            keep.append(i)
+    return keep
+
+
+class ConcatLibrary(FeatureLibrary):
+    """Columns of several libraries side by side (``a + b``), duplicates dropped."""
+
+    def __init__(self, libraries: Sequence[FeatureLibrary]):
+        flat = []
+        for lib in libraries:
+            if not isinstance(lib, FeatureLibrary):
+                raise ParameterError(f"libraries can only be added to libraries; got "
+                                     f"{type(lib).__name__}")
+            flat += lib.libraries if isinstance(lib, ConcatLibrary) else [lib]
+        self.libraries = flat
+
+    def fit(self, names):
+        exprs = [e for lib in self.libraries for e in lib.fit(names).feature_expressions_]
+        self._keep = _unique(exprs)
+        self._bind(names, [exprs[i] for i in self._keep])
+        return self
+
+    def user_functions(self):
+        return {k: v for lib in self.libraries for k, v in lib.user_functions().items()}
+
+    def _transform(self, Z):
+        theta = np.hstack([lib._transform(Z) for lib in self.libraries])
+        return theta if len(self._keep) == theta.shape[1] else theta[:, self._keep]
+
+
+class TensorLibrary(FeatureLibrary):
+    """All products of a column of ``left`` and a column of ``right`` (``left * right``)."""
+
+    def __init__(self, left: FeatureLibrary, right: FeatureLibrary):
+        if not isinstance(right, FeatureLibrary):
+            raise ParameterError(f"libraries can only be multiplied by libraries; got "
+                                 f"{type(right).__name__}")
+        self.left = left
+        self.right = right
+
+    def fit(self, names):
+        a = self.left.fit(names).feature_expressions_
+        b = self.right.fit(names).feature_expressions_
+        exprs = [ea * eb for ea in a for eb in b]
+        self._keep = _unique(exprs)
+        self._bind(names, [exprs[i] for i in self._keep])
+        return self
+
+    def user_functions(self):
+        return {**self.left.user_functions(), **self.right.user_functions()}
+
+    def _transform(self, Z):
+        a, b = self.left._transform(Z), self.right._transform(Z)
+        theta = (a[:, :, None] * b[:, None, :]).reshape(Z.shape[0], -1)
+        return theta if len(self._keep) == theta.shape[1] else theta[:, self._keep]

@@ -1,0 +1,55 @@
+"""Fourier library: sin and cos of integer (or given) multiples of each variable."""
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ParameterError
+from .base import BaseLibrary
+
+
+class FourierLibrary(BaseLibrary):
+    """``sin(k z_j)``, ``cos(k z_j)`` for frequencies ``k`` and chosen variables ``z_j``.
+
+    Order as PySINDy: for each frequency, for each variable, sin then cos.
+
+    Args:
+        n_frequencies: use ``k = 1, ..., n_frequencies`` (ignored if ``frequencies`` given).
+        frequencies: explicit list of frequencies (rad per unit of the variable).
+        include_sin, include_cos: which of the two to include.
+        variables: names or indices of z = [x, u] to use; ``None`` = all.
+    """
+
+    def __init__(self, n_frequencies: int = 1, *, frequencies=None, include_sin: bool = True,
+                 include_cos: bool = True, variables=None):
+        super().__init__(variables=variables)
+        self.n_frequencies = n_frequencies
+        self.frequencies = frequencies
+        self.include_sin = include_sin
+        self.include_cos = include_cos
+
+    def _freqs(self) -> list:
+        if self.frequencies is not None:
+            freqs = [sp.nsimplify(f) for f in self.frequencies]
+        elif isinstance(self.n_frequencies, (int, np.integer)) and self.n_frequencies >= 1:
+            freqs = [sp.Integer(k) for k in range(1, self.n_frequencies + 1)]
+        else:
+            raise ParameterError(f"n_frequencies must be an integer >= 1; got {self.n_frequencies!r}")
+        if not (self.include_sin or self.include_cos):
+            raise ParameterError("FourierLibrary needs include_sin or include_cos to be True")
+        return freqs
+
+    def _expressions(self, symbols):
+        self._plan = []
+        exprs = []
+        for k in self._freqs():
+            for j, s in enumerate(symbols):
+                for use, fn, np_fn in ((self.include_sin, sp.sin, np.sin),
+                                       (self.include_cos, sp.cos, np.cos)):
+                    if use:
+                        exprs.append(fn(k * s))
+                        self._plan.append((np_fn, float(k), j))
+        return exprs
+
+    def _evaluate(self, Zs):
+        return np.column_stack([f(k * Zs[:, j]) for f, k, j in self._plan])

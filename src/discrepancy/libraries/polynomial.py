@@ -1,0 +1,54 @@
+"""Polynomial library in the column order of PySINDy/scikit-learn."""
+from __future__ import annotations
+
+from itertools import combinations, combinations_with_replacement
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ParameterError
+from .base import BaseLibrary
+
+
+class PolynomialLibrary(BaseLibrary):
+    """All monomials of the chosen variables up to ``degree``.
+
+    Columns are ordered by degree, then as ``itertools.combinations_with_replacement``
+    (the order of PySINDy and scikit-learn): ``1, x1, x2, x1^2, x1 x2, x2^2, ...``.
+
+    Args:
+        degree: highest total degree (>= 0).
+        include_bias: include the constant column ``1``.
+        interaction_only: only products of distinct variables (no powers).
+        variables: names or indices of z = [x, u] to use; ``None`` = all.
+    """
+
+    def __init__(self, degree: int = 2, *, include_bias: bool = True,
+                 interaction_only: bool = False, variables=None):
+        super().__init__(variables=variables)
+        self.degree = degree
+        self.include_bias = include_bias
+        self.interaction_only = interaction_only
+
+    def _combos(self, k: int) -> list[tuple[int, ...]]:
+        if not isinstance(self.degree, (int, np.integer)) or isinstance(self.degree, bool) \
+                or self.degree < 0:
+            raise ParameterError(f"degree must be an integer >= 0; got {self.degree!r}")
+        pick = combinations if self.interaction_only else combinations_with_replacement
+        start = 0 if self.include_bias else 1
+        return [c for d in range(start, self.degree + 1) for c in pick(range(k), d)]
+
+    def _expressions(self, symbols):
+        self._monomials = self._combos(len(symbols))
+        return [sp.Mul(*[symbols[i] for i in c]) for c in self._monomials]
+
+    def _evaluate(self, Zs):
+        """Each monomial is its prefix times one variable: one multiply per column."""
+        m = Zs.shape[0]
+        out = np.empty((m, len(self._monomials)))
+        column = {(): np.ones(m)}
+        for j, c in enumerate(self._monomials):
+            if c not in column:
+                column[c] = column[c[:-1]] * Zs[:, c[-1]]
+            out[:, j] = column[c]
+        return out

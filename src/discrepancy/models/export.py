@@ -1,0 +1,75 @@
+"""Exact export of a fitted model to sympy, LaTeX and CasADi."""
+from __future__ import annotations
+
+import sympy as sp
+
+from ..errors import ExportError, ParameterError
+from ..symbolic import feature_name, symbol
+from ..symbolic import to_casadi as expression_to_casadi
+
+
+def _part(model, part):
+    if part is None:
+        part = "hybrid" if model.prior_.is_symbolic or model.prior is None else "discrepancy"
+    if part not in ("hybrid", "discrepancy"):
+        raise ParameterError(f"part must be 'hybrid' or 'discrepancy'; got {part!r}")
+    if part == "hybrid" and model.prior is not None and not model.prior_.is_symbolic:
+        raise ExportError("the prior is a Python callable, so the hybrid model has no exact "
+                          "symbolic form; pass the prior as sympy expressions, or ask for "
+                          "part='discrepancy'")
+    return part
+
+
+def discrepancy_expressions(model) -> list[sp.Expr]:
+    """``g_i = Σ_j ξ_ij θ_j`` for each state, with the fitted float coefficients."""
+    model.check_is_fitted()
+    return [sp.Add(*[sp.Float(c) * e for c, e in zip(row, model.feature_expressions_,
+                                                       strict=True) if c != 0])
+            for row in model.coef_]
+
+
+def to_sympy(model, part=None) -> list[sp.Expr]:
+    part = _part(model, part)
+    g = discrepancy_expressions(model)
+    if part == "discrepancy" or not model.prior_.is_symbolic:
+        return g
+    return [f + gi for f, gi in zip(model.prior_.expressions, g, strict=True)]
+
+
+def to_latex(model, precision: int = 4, part=None) -> str:
+    exprs = to_sympy(model, part)
+    lines = []
+    for name, e in zip(model.state_names_, exprs, strict=True):
+        rounded = e.xreplace({f: sp.Float(f, precision) for f in e.atoms(sp.Float)})
+        lhs = r"\dot{" + sp.latex(symbol(name)) + "}"
+        rhs = sp.latex(rounded) if e != 0 else "0"
+        if part == "discrepancy" or (model.prior is not None and not model.prior_.is_symbolic):
+            lhs = r"\delta " + lhs
+        lines.append(f"{lhs} &= {rhs}")
+    return "\\begin{aligned}\n" + " \\\\\n".join(lines) + "\n\\end{aligned}"
+
+
+def to_casadi(model, part=None):
+    """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms)."""
+    import casadi as ca
+
+    part = _part(model, part)
+    x = ca.SX.sym("x", model.n_states_)
+    u = ca.SX.sym("u", model.n_inputs_)
+    variables = {n: x[i] for i, n in enumerate(model.state_names_)}
+    variables.update({n: u[i] for i, n in enumerate(model.input_names_)})
+    rows = []
+    for i in range(model.n_states_):
+        total = 0
+        for c, e in zip(model.coef_[i], model.feature_expressions_, strict=True):
+            if c != 0:
+                name = feature_name(e, model.variable_names_)
+                total = total + float(c) * expression_to_casadi(e, variables, term=name)
+        if part == "hybrid" and model.prior_.is_symbolic:
+            total = total + expression_to_casadi(model.prior_.expressions[i], variables,
+                                                 term=f"prior[{i}]")
+        rows.append(total)
+    xdot = ca.vertcat(*[ca.SX(r) if not isinstance(r, ca.SX) else r for r in rows])
+    if model.n_inputs_ == 0:
+        return ca.Function("f", [x], [xdot], ["x"], ["xdot"])
+    return ca.Function("f", [x, u], [xdot], ["x", "u"], ["xdot"])

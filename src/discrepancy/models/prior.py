@@ -1,0 +1,90 @@
+"""The prior model f_m(x, u): a vectorised callable, sympy expressions, or nothing."""
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ParameterError, PriorError
+from ..symbolic import compile_numpy, symbol
+
+
+class Prior:
+    """Evaluates a prior on ``x`` ``(m, n)`` and ``u`` ``(m, r)`` or ``None``, checking its output.
+
+    Args:
+        prior: ``None`` (plain SINDy), a callable ``f_m(x, u) -> (m, n)`` (or ``f_m(x)``),
+            or a sequence of ``n`` sympy expressions in the state and input symbols.
+        state_names, input_names: variable names the expressions refer to.
+    """
+
+    def __init__(self, prior, state_names: Sequence[str], input_names: Sequence[str]):
+        self.n = len(state_names)
+        self.names = [*state_names, *input_names]
+        self.expressions: list[sp.Expr] | None = None
+        self._call: Callable | None = None
+        if prior is None:
+            return
+        if callable(prior) and not isinstance(prior, sp.Basic):
+            self._call = _adapt(prior)
+        elif isinstance(prior, (list, tuple, sp.MatrixBase)):
+            self.expressions = self._check_expressions(list(prior))
+            compiled = [compile_numpy(e, self.names) for e in self.expressions]
+            self._call = lambda x, u: np.column_stack(
+                [f(x if u is None else np.hstack([x, u])) for f in compiled])
+        else:
+            raise ParameterError("prior must be None, a callable f_m(x, u) or a list of "
+                                 f"{self.n} sympy expressions; got {type(prior).__name__}")
+
+    def _check_expressions(self, exprs):
+        if len(exprs) != self.n:
+            raise ParameterError(f"prior must have one expression per state ({self.n}); "
+                                 f"got {len(exprs)}")
+        out = []
+        for i, e in enumerate(exprs):
+            e = sp.sympify(e) if isinstance(e, (int, float)) else e
+            if not isinstance(e, sp.Basic):
+                raise ParameterError(f"prior[{i}] must be a sympy expression; got "
+                                     f"{type(e).__name__}")
+            unknown = sorted(s.name for s in e.free_symbols if s.name not in self.names)
+            if unknown:
+                raise ParameterError(f"prior[{i}] = {e} uses {unknown}, not among the "
+                                     f"variables {self.names}")
+            out.append(e.xreplace({s: symbol(s.name) for s in e.free_symbols}))
+        return out
+
+    @property
+    def is_symbolic(self) -> bool:
+        return self.expressions is not None
+
+    def __call__(self, x: np.ndarray, u: np.ndarray | None) -> np.ndarray:
+        """``f_m(x, u)`` ``(m, n)``; zeros for no prior. Raises PriorError on bad output."""
+        if self._call is None:
+            return np.zeros_like(x)
+        try:
+            out = np.asarray(self._call(x, u), dtype=float)
+        except Exception as e:
+            raise PriorError(f"prior raised {type(e).__name__}: {e} when called with x of shape "
+                             f"{x.shape} and u {None if u is None else u.shape}") from e
+        if out.shape != x.shape:
+            raise PriorError(f"prior must return an array of shape {x.shape} (same as x); "
+                             f"got shape {out.shape}")
+        if not np.all(np.isfinite(out)):
+            row = int(np.argwhere(~np.isfinite(out))[0][0])
+            raise PriorError(f"prior returned non-finite values (first at row {row}, "
+                             f"x = {x[row]})")
+        return out
+
+
+def _adapt(f: Callable) -> Callable:
+    """Call ``f(x, u)``, or ``f(x)`` when it takes a single argument."""
+    try:
+        params = [p for p in inspect.signature(f).parameters.values()
+                  if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD, p.VAR_POSITIONAL)]
+    except (TypeError, ValueError):
+        return f
+    if len(params) == 1 and params[0].kind != params[0].VAR_POSITIONAL:
+        return lambda x, u: f(x)
+    return f

@@ -1,0 +1,35 @@
+"""Scores of a fitted model on data."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.trajectory import as_trajectories
+from ..errors import ParameterError, ShapeError
+
+METRICS = ("r2", "rmse", "trajectory")
+
+
+def score(model, x, t=None, u=None, x_dot=None, *, metric: str = "r2") -> float:
+    """See :meth:`DiscrepancyModel.score`."""
+    if metric not in METRICS:
+        raise ParameterError(f"metric must be one of {', '.join(METRICS)}; got {metric!r}")
+    trajectories = as_trajectories(x, t, u, x_dot)
+    if metric == "trajectory":
+        if len(trajectories) != 1:
+            raise ShapeError("metric='trajectory' scores one trajectory; got "
+                             f"{len(trajectories)}")
+        tr = trajectories[0]
+        sim = model.simulate(tr.x[0], tr.t, tr.u)
+        return float(np.linalg.norm(sim - tr.x) / np.linalg.norm(tr.x))
+    truth, pred = [], []
+    for tr in trajectories:
+        z, y = model.residual(tr)
+        xs = z[:, :model.n_states_]
+        truth.append(y + model.prior_(xs, tr.u))
+        pred.append(model.predict(xs, tr.u))
+    truth, pred = np.vstack(truth), np.vstack(pred)
+    if metric == "rmse":
+        return float(np.sqrt(np.mean((truth - pred) ** 2)))
+    ss_res = np.sum((truth - pred) ** 2, axis=0)
+    ss_tot = np.sum((truth - truth.mean(axis=0)) ** 2, axis=0)
+    return float(np.mean(1 - ss_res / np.where(ss_tot > 0, ss_tot, 1.0)))

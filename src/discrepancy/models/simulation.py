@@ -1,0 +1,69 @@
+"""Integrating a vectorised right-hand side ``f(x (k, n), u (k, r)) -> (k, n)`` with scipy."""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from ..data.trajectory import as_2d, as_times
+from ..errors import ConvergenceError, ParameterError, ShapeError
+
+
+def input_law(u, t: np.ndarray, n_inputs: int, *, hold: str = "linear") -> Callable | None:
+    """``u(τ) -> (r,)`` from an array sampled at ``t`` or a callable (checked once).
+
+    ``hold="linear"`` interpolates between samples; ``"zoh"`` holds each sample until the next.
+    """
+    if n_inputs == 0:
+        if u is not None:
+            raise ShapeError("u was given but the model has no inputs")
+        return None
+    if u is None:
+        raise ShapeError(f"u is required: the model has {n_inputs} inputs")
+    if callable(u):
+        probe = np.atleast_1d(np.asarray(u(float(t[0])), dtype=float))
+        if probe.shape != (n_inputs,):
+            raise ShapeError(f"u(t) must return an array of shape ({n_inputs},); "
+                             f"got {probe.shape}")
+        return lambda tau: np.atleast_1d(np.asarray(u(tau), dtype=float))
+    samples = as_2d("u", u, n_rows=len(t), n_cols=n_inputs, allow_1d=True)
+    if hold == "zoh":
+        def held(tau):
+            i = min(max(int(np.searchsorted(t, tau, side="right")) - 1, 0), len(t) - 1)
+            return samples[i]
+        return held
+    if hold != "linear":
+        raise ParameterError(f"u_hold must be 'linear' or 'zoh'; got {hold!r}")
+    return lambda tau: np.array([np.interp(tau, t, samples[:, j]) for j in range(n_inputs)])
+
+
+def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
+              method: str = "LSODA", rtol: float = 1e-10, atol: float = 1e-10,
+              u_hold: str = "linear", **solver_kws) -> np.ndarray:
+    """Solve ``dx/dt = rhs(x, u(t))`` from ``x0`` and return the states at ``t`` ``(k, n)``.
+
+    Raises ConvergenceError when the solver stops early (blow-up, stiffness), naming
+    the time reached, instead of returning a partial trajectory.
+    """
+    x0 = np.asarray(x0, dtype=float).ravel()
+    if x0.shape != (n_states,) or not np.all(np.isfinite(x0)):
+        raise ShapeError(f"x0 must be {n_states} finite numbers (one per state); "
+                         f"got shape {np.shape(x0)}")
+    times = as_times("t", t, np.size(t))
+    law = input_law(u, times, n_inputs, hold=u_hold)
+
+    if law is None:
+        def f(tau, x):
+            return rhs(x[None, :], None)[0]
+    else:
+        def f(tau, x):
+            return rhs(x[None, :], law(tau)[None, :])[0]
+
+    sol = solve_ivp(f, (times[0], times[-1]), x0, t_eval=times, method=method, rtol=rtol,
+                    atol=atol, **solver_kws)
+    if sol.status != 0 or sol.y.shape[1] != len(times):
+        reached = sol.t[-1] if sol.t.size else times[0]
+        raise ConvergenceError(f"integration stopped at t = {reached:.6g} of {times[-1]:.6g}: "
+                               f"{sol.message}")
+    return sol.y.T

@@ -1,0 +1,91 @@
+"""Base of the sparse regression solvers: everything is solved on the p×p system."""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+import scipy.linalg
+
+from ..errors import NotFittedError, ShapeError
+from .gram import GramStatistics
+
+
+def solve_normal(gram: np.ndarray, rhs: np.ndarray, alpha: float = 0.0) -> np.ndarray:
+    """Solve ``(G + αI) ξ = b`` accurately.
+
+    The system is equilibrated by the column norms first (``D G D``), which leaves
+    the solution unchanged but makes the Cholesky factorisation usable for
+    polynomial libraries whose columns differ by many orders of magnitude.
+    Falls back to a minimum-norm least-squares solve when ``G + αI`` is singular.
+    """
+    a = gram + alpha * np.eye(gram.shape[0])
+    d = np.sqrt(np.diag(a))
+    d[d == 0] = 1.0
+    scaled = a / np.outer(d, d)
+    b = rhs / (d[:, None] if rhs.ndim == 2 else d)
+    try:
+        z = scipy.linalg.solve(scaled, b, assume_a="pos", check_finite=False)
+    except (scipy.linalg.LinAlgError, ValueError):
+        z = scipy.linalg.lstsq(scaled, b, check_finite=False)[0]
+    else:
+        if not np.all(np.isfinite(z)):
+            z = scipy.linalg.lstsq(scaled, b, check_finite=False)[0]
+    return z / (d[:, None] if rhs.ndim == 2 else d)
+
+
+class Optimizer(ABC):
+    """A sparse regression solver ``y ≈ Θ ξ`` (scikit-learn style).
+
+    ``fit(theta, y)`` forms the Gram statistics and calls ``fit_gram``;
+    ``fit_gram(gram, rhs)`` works from accumulated statistics alone. After either,
+    ``coef_`` is ``(n_targets, n_features)`` as in PySINDy.
+
+    Args (shared):
+        normalize_columns: solve on columns scaled to unit l2 norm, then scale back.
+    """
+
+    normalize_columns: bool = False
+
+    def fit(self, theta, y) -> Optimizer:
+        """Fit on a feature matrix ``theta`` ``(m, p)`` and targets ``y`` ``(m,)`` or ``(m, n)``."""
+        from ..data.trajectory import as_2d
+
+        theta = as_2d("theta", theta)
+        y = as_2d("y", y, n_rows=theta.shape[0], allow_1d=True)
+        stats = GramStatistics(theta.shape[1], y.shape[1]).add(theta, y)
+        return self.fit_gram(stats.gram, stats.rhs, n_samples=stats.count)
+
+    def fit_gram(self, gram, rhs, *, n_samples: int | None = None) -> Optimizer:
+        """Fit from ``gram = ΘᵀΘ`` ``(p, p)`` and ``rhs = Θᵀy`` ``(p, n)`` (or ``(p,)``)."""
+        from ..data.trajectory import as_2d
+
+        self._check_parameters()
+        gram = as_2d("gram", gram)
+        rhs = as_2d("rhs", rhs, n_rows=gram.shape[0], allow_1d=True)
+        if gram.shape[0] != gram.shape[1]:
+            raise ShapeError(f"gram must be square (p, p); got {gram.shape}")
+        scale = np.ones(gram.shape[0])
+        if self.normalize_columns:
+            norms = np.sqrt(np.diag(gram))
+            scale = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+            gram, rhs = gram * np.outer(scale, scale), rhs * scale[:, None]
+        coef = self._solve(gram, rhs, n_samples=n_samples)
+        self.coef_ = coef * scale[None, :]
+        self.ind_ = np.abs(self.coef_) > 0
+        return self
+
+    @abstractmethod
+    def _solve(self, gram: np.ndarray, rhs: np.ndarray, *, n_samples: int | None) -> np.ndarray:
+        """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics."""
+
+    def _check_parameters(self) -> None:
+        """Hook: validate constructor arguments (called at fit time)."""
+
+    def check_is_fitted(self) -> None:
+        if not hasattr(self, "coef_"):
+            raise NotFittedError(f"{type(self).__name__} is not fitted; call fit or fit_gram first")
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in vars(self).items()
+                         if not k.startswith("_") and not k.endswith("_"))
+        return f"{type(self).__name__}({args})"
