@@ -44,7 +44,7 @@ def _number(expr) -> float:
 
 
 def compile_numpy(expr: sp.Expr, names: Sequence[str],
-                  functions: Mapping[str, Callable] | None = None) -> Callable[[np.ndarray], np.ndarray]:
+                  functions: Mapping[str, Callable] | None = None) -> Callable:
     """Vectorised evaluator of ``expr``: ``f(Z)`` with ``Z`` ``(m, len(names))`` -> ``(m,)``.
 
     ``functions`` maps names of undefined sympy functions (user numpy terms)
@@ -97,8 +97,11 @@ def _reduce(op, fs, Z):
 
 
 def to_data(expr: sp.Expr):
-    """Nested JSON-compatible lists for ``expr``: ``["sym", name]``, ``["num", p, q]``,
-    ``["float", value]``, ``["add", ...]``, ``["mul", ...]``, ``["pow", b, e]``, ``["fn", name, ...]``."""
+    """Nested JSON-compatible lists for ``expr``.
+
+    Nodes: ``["sym", name]``, ``["num", p, q]``, ``["float", value]``, ``["add", ...]``,
+    ``["mul", ...]``, ``["pow", base, exponent]``, ``["fn", name, ...]``.
+    """
     if expr.is_Symbol:
         return ["sym", expr.name]
     if expr.is_Rational:

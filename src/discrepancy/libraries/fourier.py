@@ -34,7 +34,8 @@ class FourierLibrary(BaseLibrary):
         elif isinstance(self.n_frequencies, (int, np.integer)) and self.n_frequencies >= 1:
             freqs = [sp.Integer(k) for k in range(1, self.n_frequencies + 1)]
         else:
-            raise ParameterError(f"n_frequencies must be an integer >= 1; got {self.n_frequencies!r}")
+            raise ParameterError("n_frequencies must be an integer >= 1; got "
+                                 f"{self.n_frequencies!r}")
         if not (self.include_sin or self.include_cos):
             raise ParameterError("FourierLibrary needs include_sin or include_cos to be True")
         return freqs

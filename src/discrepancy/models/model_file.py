@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 
-
 from .. import __version__
 from ..errors import ModelFileError, ParameterError
 from ..symbolic import IDENTIFIER, from_data, to_data
@@ -106,8 +105,8 @@ def read_model_file(path) -> dict:
             exprs = prior.get("expressions")
             if not isinstance(exprs, list) or len(exprs) != len(states):
                 raise _fail(f"prior expressions must be a list of {len(states)} expressions")
-            prior = {"kind": "sympy",
-                     "expressions": [from_data(e, where=f"prior[{i}]") for i, e in enumerate(exprs)]}
+            rebuilt = [from_data(e, where=f"prior[{i}]") for i, e in enumerate(exprs)]
+            prior = {"kind": "sympy", "expressions": rebuilt}
     return {"state_names": states, "input_names": inputs, "features": features,
             "coefficients": coef, "prior": prior, "user_functions": functions}
 

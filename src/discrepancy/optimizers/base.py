@@ -78,7 +78,7 @@ class Optimizer(ABC):
     def _solve(self, gram: np.ndarray, rhs: np.ndarray, *, n_samples: int | None) -> np.ndarray:
         """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics."""
 
-    def _check_parameters(self) -> None:
+    def _check_parameters(self) -> None:  # noqa: B027 - optional hook, no-op by default
         """Hook: validate constructor arguments (called at fit time)."""
 
     def check_is_fitted(self) -> None:

@@ -1,0 +1,138 @@
+"""Loading measured trajectories from CSV, NPZ, MATLAB ``.mat`` and HDF5 files.
+
+Formats are read with their standard libraries (``csv``/numpy, ``numpy.load`` with
+``allow_pickle=False``, ``scipy.io.loadmat``, ``h5py``); nothing is unpickled.
+"""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import DataError, UnknownNameError
+from .trajectory import as_2d, as_times
+
+SUFFIXES = {".csv": "csv", ".txt": "csv", ".npz": "npz", ".mat": "mat", ".h5": "hdf5",
+            ".hdf5": "hdf5", ".hdf": "hdf5"}
+
+
+@dataclass(frozen=True)
+class LoadedData:
+    """Arrays read from a file.
+
+    Attributes:
+        x: states ``(m, n)``; t: times ``(m,)`` or ``None`` (give a step to ``fit``);
+        u: inputs ``(m, r)`` or ``None``; state_names, input_names: column names.
+    """
+
+    x: np.ndarray
+    t: np.ndarray | None
+    u: np.ndarray | None
+    state_names: list[str]
+    input_names: list[str]
+
+
+def load(path, *, states=None, inputs=None, time: str | None = "t") -> LoadedData:
+    """Read one trajectory from a file.
+
+    Args:
+        path: ``.csv``/``.txt`` (header row of column names), ``.npz``, ``.mat`` or
+            ``.h5``/``.hdf5``.
+        states: for CSV, the state column names (default: every column that is not
+            time or an input); for NPZ/MAT/HDF5, either one variable name holding an
+            ``(m, n)`` array (default ``"x"``) or a list of names of 1-D variables.
+        inputs: like ``states`` (default: CSV none; others ``"u"`` if present).
+        time: name of the time column/variable (``None``: no times in the file).
+
+    Raises:
+        FileNotFoundError, UnknownNameError (unknown suffix or variable, listing what the
+        file has), DataError (non-numeric or non-finite values, bad times).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"data file {path} does not exist")
+    kind = SUFFIXES.get(path.suffix.lower())
+    if kind is None:
+        raise UnknownNameError(f"path {path.name!r}: unknown file type {path.suffix!r}; "
+                               f"valid suffixes: {', '.join(sorted(SUFFIXES))}")
+    if kind == "csv":
+        return _from_columns(path, *_read_csv(path), states, inputs, time)
+    variables = _read_variables(path, kind)
+    return _from_variables(path, variables, states, inputs, time)
+
+
+def _read_csv(path: Path):
+    with open(path, newline="") as f:
+        rows = [r for r in csv.reader(f) if any(cell.strip() for cell in r)]
+    if len(rows) < 2:
+        raise DataError(f"{path.name}: a CSV file needs a header row and data rows")
+    header = [h.strip() for h in rows[0]]
+    while header and header[-1] == "":
+        header.pop()
+    try:
+        data = np.array([[float(c) for c in r[:len(header)]] for r in rows[1:]])
+    except ValueError as e:
+        raise DataError(f"{path.name}: non-numeric value in the data rows ({e})") from None
+    return header, data
+
+
+def _from_columns(path, header, data, states, inputs, time):
+    def pick(names):
+        missing = [n for n in names if n not in header]
+        if missing:
+            raise UnknownNameError(f"{path.name}: columns {missing} not found; the file has "
+                                   f"{header}")
+        return data[:, [header.index(n) for n in names]]
+    inputs = list(inputs or [])
+    has_time = time is not None and time in header
+    if states is None:
+        states = [h for h in header if h not in inputs and not (has_time and h == time)]
+    x = as_2d(f"{path.name} states", pick(list(states)))
+    u = as_2d(f"{path.name} inputs", pick(inputs)) if inputs else None
+    t = as_times(f"{path.name} column {time!r}", pick([time])[:, 0], len(x)) if has_time else None
+    return LoadedData(x, t, u, list(states), inputs)
+
+
+def _read_variables(path: Path, kind: str) -> dict[str, np.ndarray]:
+    if kind == "npz":
+        with np.load(path, allow_pickle=False) as f:
+            return {k: f[k] for k in f.files}
+    if kind == "mat":
+        from scipy.io import loadmat
+        return {k: v for k, v in loadmat(path).items() if not k.startswith("__")}
+    import h5py
+    out = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda name, obj: out.__setitem__(name, obj[()])
+                     if isinstance(obj, h5py.Dataset) else None)
+    return out
+
+
+def _from_variables(path, variables, states, inputs, time):
+    def get(name):
+        if name not in variables:
+            raise UnknownNameError(f"{path.name}: variable {name!r} not found; the file has "
+                                   f"{sorted(variables)}")
+        return np.asarray(variables[name])
+
+    def columns(spec, default_stem):
+        if isinstance(spec, str):
+            a = get(spec)
+            a = a[:, None] if a.ndim == 1 else a
+            if a.ndim == 2 and a.shape[0] < a.shape[1] and a.shape[0] <= 16:
+                a = a.T  # MATLAB stores variables as rows
+            return a, [f"{default_stem}{i + 1}" for i in range(a.shape[1])]
+        return np.column_stack([get(n).ravel() for n in spec]), list(spec)
+
+    x, state_names = columns("x" if states is None else states, "x")
+    x = as_2d(f"{path.name} states", x)
+    u, input_names = None, []
+    if inputs is not None or "u" in variables:
+        u, input_names = columns("u" if inputs is None else inputs, "u")
+        u = as_2d(f"{path.name} inputs", u, n_rows=len(x))
+    t = None
+    if time is not None and time in variables:
+        t = as_times(f"{path.name} variable {time!r}", get(time).ravel(), len(x))
+    return LoadedData(x, t, u, state_names, input_names)
