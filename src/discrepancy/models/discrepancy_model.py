@@ -56,6 +56,11 @@ class DiscrepancyModel:
         Returns:
             self
         """
+        from ..streaming import is_streamed
+
+        if is_streamed(x):  # dask arrays, chunk iterators and chunk sources: see streaming.py
+            from ..streaming import fit_streamed
+            return fit_streamed(self, x, t=t, u=u, x_dot=x_dot)
         trajectories = as_trajectories(x, t, u, x_dot)
         first = trajectories[0]
         self._setup(first.x.shape[1], 0 if first.u is None else first.u.shape[1])
@@ -88,13 +93,13 @@ class DiscrepancyModel:
         return z, y
 
     def _accumulate(self, stats: GramStatistics, trajectory: Trajectory) -> None:
+        from ..accumulate import accumulate
+
         z, y = self.residual(trajectory)
-        for start in range(0, z.shape[0], self.chunk_size):
-            rows = slice(start, start + self.chunk_size)
-            stats.add(self.feature_library_.transform(z[rows]), y[rows])
+        accumulate(stats, self.feature_library_.transform, z, y)
 
     def _fit_statistics(self, stats: GramStatistics) -> DiscrepancyModel:
-        self.optimizer_.fit_gram(stats.gram, stats.rhs, n_samples=stats.count)
+        self.optimizer_.fit_gram(stats.gram, stats.rhs, n_samples=stats.count, yy=stats.yy)
         self.statistics_ = stats
         self._set_coefficients(self.optimizer_.coef_, self.feature_library_.feature_expressions_,
                                self.feature_library_.user_functions())
@@ -200,6 +205,20 @@ class DiscrepancyModel:
         from .scoring import score
         self.check_is_fitted()
         return score(self, x, t, u, x_dot, metric=metric)
+
+    def bootstrap(self, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
+                  block_length: int | None = None, method: str = "wild", seed: int = 0):
+        """Uncertainty of every term: a block bootstrap of the fit on these data.
+
+        ``method="wild"`` (repeat the experiment with new noise) or ``"pairs"`` (also
+        resample which states were visited); see :mod:`discrepancy.models.uncertainty`.
+
+        Returns a :class:`~discrepancy.models.uncertainty.CoefficientUncertainty` with
+        ``std``, ``interval()``, ``inclusion_probability`` and a printable ``table()``.
+        """
+        from .uncertainty import bootstrap
+        return bootstrap(self, x, t, u, x_dot, n_resamples=n_resamples,
+                         block_length=block_length, method=method, seed=seed)
 
     # ------------------------------------------------------------------ export
     def to_sympy(self, part: str | None = None):

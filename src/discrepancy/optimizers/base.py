@@ -6,7 +6,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 import scipy.linalg
 
-from ..errors import NotFittedError, ShapeError
+from ..errors import ConvergenceError, NotFittedError, ShapeError
 from .gram import GramStatistics
 
 
@@ -53,10 +53,14 @@ class Optimizer(ABC):
         theta = as_2d("theta", theta)
         y = as_2d("y", y, n_rows=theta.shape[0], allow_1d=True)
         stats = GramStatistics(theta.shape[1], y.shape[1]).add(theta, y)
-        return self.fit_gram(stats.gram, stats.rhs, n_samples=stats.count)
+        return self.fit_gram(stats.gram, stats.rhs, n_samples=stats.count, yy=stats.yy)
 
-    def fit_gram(self, gram, rhs, *, n_samples: int | None = None) -> Optimizer:
-        """Fit from ``gram = ΘᵀΘ`` ``(p, p)`` and ``rhs = Θᵀy`` ``(p, n)`` (or ``(p,)``)."""
+    def fit_gram(self, gram, rhs, *, n_samples: int | None = None, yy=None) -> Optimizer:
+        """Fit from ``gram = ΘᵀΘ`` ``(p, p)`` and ``rhs = Θᵀy`` ``(p, n)`` (or ``(p,)``).
+
+        ``n_samples`` (m) and ``yy`` (``Σ y²`` per target, ``(n,)``) are needed only by
+        solvers that use them (Lasso's 1/m scaling, automatic thresholds).
+        """
         from ..data.trajectory import as_2d
 
         self._check_parameters()
@@ -69,13 +73,19 @@ class Optimizer(ABC):
             norms = np.sqrt(np.diag(gram))
             scale = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
             gram, rhs = gram * np.outer(scale, scale), rhs * scale[:, None]
-        coef = self._solve(gram, rhs, n_samples=n_samples)
+        coef = self._solve(gram, rhs, n_samples=n_samples,
+                           yy=None if yy is None else np.asarray(yy, dtype=float).ravel())
+        if not np.all(np.isfinite(coef)):
+            raise ConvergenceError(f"{type(self).__name__} produced non-finite coefficients; "
+                                   "the library columns may be collinear or overflow (try "
+                                   "normalize_columns=True or a smaller library)")
         self.coef_ = coef * scale[None, :]
         self.ind_ = np.abs(self.coef_) > 0
         return self
 
     @abstractmethod
-    def _solve(self, gram: np.ndarray, rhs: np.ndarray, *, n_samples: int | None) -> np.ndarray:
+    def _solve(self, gram: np.ndarray, rhs: np.ndarray, *, n_samples: int | None,
+               yy: np.ndarray | None = None) -> np.ndarray:
         """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics."""
 
     def _check_parameters(self) -> None:  # noqa: B027 - optional hook, no-op by default

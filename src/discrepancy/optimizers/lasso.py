@@ -34,7 +34,7 @@ class Lasso(Optimizer):
         if not isinstance(self.alpha, (int, float, np.number)) or not self.alpha >= 0:
             raise ParameterError(f"alpha must be a number >= 0; got {self.alpha!r}")
 
-    def _solve(self, gram, rhs, *, n_samples=None):
+    def _solve(self, gram, rhs, *, n_samples=None, yy=None):
         m = 1 if n_samples is None else n_samples
         p, n = rhs.shape
         diag = np.diag(gram).copy()

@@ -19,7 +19,10 @@ class STLSQ(Optimizer):
     """Sequentially thresholded ridge regression.
 
     Args:
-        threshold: coefficients with ``|ξ| < threshold`` are set to zero (units of y / Θ).
+        threshold: coefficients with ``|ξ| < threshold`` are set to zero (units of y / Θ);
+            ``"auto"`` picks it per target by BIC over the whole threshold path
+            (needs ``yy`` in ``fit_gram``; ``fit`` and ``DiscrepancyModel`` pass it).
+            The chosen values are in ``thresholds_``.
         alpha: ridge weight ``α`` in ``|y - Θξ|² + α|ξ|²`` during thresholding.
         max_iter: maximum thresholding iterations.
         normalize_columns: threshold on coefficients of unit-norm columns.
@@ -35,14 +38,26 @@ class STLSQ(Optimizer):
         self.unbias = unbias
 
     def _check_parameters(self):
-        for name in ("threshold", "alpha"):
+        names = ("alpha",) if self.threshold == "auto" else ("threshold", "alpha")
+        for name in names:
             v = getattr(self, name)
             if not isinstance(v, (int, float, np.number)) or not np.isfinite(v) or v < 0:
                 raise ParameterError(f"{name} must be a finite number >= 0; got {v!r}")
         if not isinstance(self.max_iter, (int, np.integer)) or self.max_iter < 1:
             raise ParameterError(f"max_iter must be an integer >= 1; got {self.max_iter!r}")
 
-    def _solve(self, gram, rhs, *, n_samples=None):
+    def _solve(self, gram, rhs, *, n_samples=None, yy=None):
+        if self.threshold != "auto":
+            self.thresholds_ = np.full(rhs.shape[1], float(self.threshold))
+            return self._solve_fixed(gram, rhs)
+        if yy is None or n_samples is None:
+            raise ParameterError("threshold='auto' needs the targets' sums of squares: call "
+                                 "fit(theta, y), or fit_gram(gram, rhs, n_samples=m, yy=Σy²)")
+        from .selection import select_thresholds
+        coef, self.thresholds_ = select_thresholds(self, gram, rhs, yy, n_samples)
+        return coef
+
+    def _solve_fixed(self, gram, rhs):
         p, n = rhs.shape
         ind = np.ones((n, p), dtype=bool)
         coef = np.zeros((n, p))
