@@ -1,0 +1,58 @@
+"""Robustness of swing-up strategies to perturbed true systems (issue 4, item 6).
+
+Each case draws the link parameters (all of Table 1 except g) independently within
+±2 % and the initial angles within ±0.02 rad of hanging; every strategy (a plan and
+its input law: held inputs or a tracker) is then run on that true system.
+"""
+from __future__ import annotations
+
+import numpy as np
+from tqdm import tqdm
+
+from ..control import as_casadi, replay, swing_up_errors
+from ..systems.double_pendulum_on_cart import CartPendulumParameters, DoublePendulumOnCart
+
+PERTURBED = ("m1", "m2", "a1", "a2", "I1", "I2", "l1", "l2", "k1", "k2")
+PARAMETER_SPREAD, ANGLE_SPREAD = 0.02, 0.02
+
+
+def perturbed_cases(n_cases: int, seed: int, x_hang):
+    """``[(parameters, x0)]``: ``n_cases`` random true systems and initial states."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for _ in range(n_cases):
+        factors = {k: rng.uniform(1 - PARAMETER_SPREAD, 1 + PARAMETER_SPREAD) for k in PERTURBED}
+        x0 = np.array(x_hang, dtype=float)
+        x0[:2] += rng.uniform(-ANGLE_SPREAD, ANGLE_SPREAD, 2)
+        cases.append((CartPendulumParameters().scaled(factors), x0))
+    return cases
+
+
+def robustness_study(strategies: dict, *, n_cases: int, seed: int, x_hang) -> dict:
+    """Run every strategy ``{name: (plan, law)}`` on ``n_cases`` perturbed true systems.
+
+    Returns success counts and rates, each case's final max angle error per strategy,
+    and the drawn cases (parameter factors, initial angle offsets).
+    """
+    cases = perturbed_cases(n_cases, seed, x_hang)
+    success = {name: [] for name in strategies}
+    errors = {name: [] for name in strategies}
+    for params, x0 in tqdm(cases, desc="perturbed true systems", disable=None):
+        f = as_casadi(DoublePendulumOnCart(params).equations())
+        for name, (plan, law) in strategies.items():
+            e = swing_up_errors(replay(f, x0, plan.t, law).final)
+            success[name].append(e["success"])
+            errors[name].append(max(e["phi1"], e["phi2"]))
+    nominal = CartPendulumParameters()
+    return {
+        "n_cases": n_cases, "seed": seed,
+        "perturbation": {"parameters": list(PERTURBED), "parameter_spread_fraction":
+                         PARAMETER_SPREAD, "initial_angle_spread_rad": ANGLE_SPREAD},
+        "success_counts": {k: int(sum(v)) for k, v in success.items()},
+        "success_rates": {k: float(np.mean(v)) for k, v in success.items()},
+        "success": success, "final_max_angle_error_rad": errors,
+        "cases": [{"parameter_factors": {k: getattr(p, k) / getattr(nominal, k)
+                                         for k in PERTURBED},
+                   "initial_angle_offsets_rad": (x0[:2] - np.asarray(x_hang)[:2]).tolist()}
+                  for p, x0 in cases],
+    }
