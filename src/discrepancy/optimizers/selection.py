@@ -7,6 +7,8 @@ information criterion ``m log(RSS/m) + k log m`` is kept.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .base import solve_normal
@@ -38,7 +40,9 @@ def select_thresholds(stlsq, gram, rhs, yy, n_samples: int) -> tuple[np.ndarray,
         for threshold in candidate_thresholds(gram, rhs[:, i], stlsq.alpha):
             solver = copy(stlsq)
             solver.threshold = float(threshold)
-            c = solver._solve_fixed(gram, rhs[:, i:i + 1])[0]
+            with warnings.catch_warnings():  # an empty model is a legitimate candidate
+                warnings.simplefilter("ignore")
+                c = solver._solve_fixed(gram, rhs[:, i:i + 1])[0]
             rss = yy[i] - 2 * c @ rhs[:, i] + c @ gram @ c
             score = bic(rss, int(np.count_nonzero(c)), n_samples)
             if best is None or score < best[0] - 1e-9 * abs(best[0]):

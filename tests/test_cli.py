@@ -1,0 +1,67 @@
+"""The command line, run as a user would (in-process through main, and once as a subprocess)."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from discrepancy.cli import main
+from discrepancy.errors import ParameterError
+from discrepancy.libraries.spec import parse_library
+
+PRIOR = '''import numpy as np
+def f_m(x, u=None):
+    return np.c_[x[:, 1], 0.1 * (1 - x[:, 0] ** 2) * x[:, 1] - x[:, 0]]
+'''
+
+
+@pytest.fixture
+def vdp_files(tmp_path, vdp_data):
+    x = vdp_data.x + 0.005 * np.random.default_rng(0).standard_normal(vdp_data.x.shape)
+    np.savetxt(tmp_path / "run.csv", np.c_[vdp_data.t, x], delimiter=",", header="t,x1,x2",
+               comments="")
+    (tmp_path / "prior.py").write_text(PRIOR)
+    return tmp_path
+
+
+def test_fit_show_simulate_round_trip(vdp_files, vdp_validation, capsys):
+    d = vdp_files
+    assert main(["fit", "--data", str(d / "run.csv"), "--prior", f"{d / 'prior.py'}:f_m",
+                 "--library", "poly(3)", "--window", "31", "--out", str(d / "m.json")]) == 0
+    out = capsys.readouterr().out
+    assert "(x2)' = prior + 0.4" in out
+    doc = json.loads((d / "m.json").read_text())
+    names = ["1", "x1", "x2"]
+    assert doc["state_names"] == ["x1", "x2"] and len(doc["features"]) == 10 and names
+    assert main(["show", str(d / "m.json"), "--latex"]) == 0
+    assert "x_{1}^{2} x_{2}" in capsys.readouterr().out
+    assert main(["simulate", "--model", str(d / "m.json"), "--prior", f"{d / 'prior.py'}:f_m",
+                 "--x0=-0.2,-0.3", "--t", "0:25:0.01", "--out", str(d / "sim.csv")]) == 0
+    sim = np.loadtxt(d / "sim.csv", delimiter=",", skiprows=1)
+    err = np.linalg.norm(sim[:, 1:] - vdp_validation.x) / np.linalg.norm(vdp_validation.x)
+    assert err < 0.01
+
+
+def test_errors_are_reported_not_raised(vdp_files, capsys):
+    d = vdp_files
+    assert main(["fit", "--data", str(d / "run.csv"), "--library", "poly(3)+"]) == 2
+    assert "library spec" in capsys.readouterr().err
+    assert main(["simulate", "--model", str(d / "run.csv"), "--x0", "1,2", "--t", "0:1:0.1"]) == 2
+    assert "model file" in capsys.readouterr().err
+
+
+def test_console_script_help_lists_commands():
+    out = subprocess.run([sys.executable, "-m", "discrepancy.cli", "--help"], capture_output=True,
+                         text=True, check=True).stdout
+    for command in ("reproduce", "fit", "simulate", "show"):
+        assert command in out
+
+
+def test_library_spec_parser_builds_the_stated_library():
+    lib = parse_library("poly(1) + fourier(1, x1) * poly(1, u)").fit(["x1", "x2", "u"])
+    assert lib.get_feature_names() == ["1", "x1", "x2", "u", "sin(x1)", "sin(x1) u",
+                                       "cos(x1)", "cos(x1) u"]
+    for bad in ["poly", "poly(x)", "spline(2)", "poly(2) poly(3)", "poly(2,", "__import__(1)"]:
+        with pytest.raises(ParameterError):
+            parse_library(bad)

@@ -1,0 +1,80 @@
+"""File loading: the same arrays come back from every format; bad files get clear errors."""
+import h5py
+import numpy as np
+import pytest
+import scipy.io
+
+from discrepancy import io
+from discrepancy.errors import DataError, UnknownNameError
+
+
+@pytest.fixture
+def arrays(rng):
+    t = np.arange(50) * 0.1
+    return t, rng.standard_normal((50, 3)), rng.standard_normal((50, 1))
+
+
+def write_csv(path, header, table):
+    np.savetxt(path, table, delimiter=",", header=",".join(header), comments="")
+
+
+def test_csv_columns_by_name(tmp_path, arrays):
+    t, x, u = arrays
+    write_csv(tmp_path / "d.csv", ["time", "a", "b", "c", "force"], np.c_[t, x, u])
+    d = io.load(tmp_path / "d.csv", inputs=["force"], time="time")
+    np.testing.assert_allclose(d.x, x, rtol=1e-15)
+    np.testing.assert_allclose(d.u, u, rtol=1e-15)
+    np.testing.assert_allclose(d.t, t, rtol=1e-15)
+    assert d.state_names == ["a", "b", "c"] and d.input_names == ["force"]
+
+
+def test_npz_mat_hdf5_give_the_same_arrays(tmp_path, arrays):
+    t, x, u = arrays
+    np.savez(tmp_path / "d.npz", t=t, x=x, u=u)
+    scipy.io.savemat(tmp_path / "d.mat", {"t": t, "x": x.T, "u": u.T})  # MATLAB rows
+    with h5py.File(tmp_path / "d.h5", "w") as f:
+        f["run/x"], f["run/u"], f["t"] = x, u, t
+    loaded = [io.load(tmp_path / "d.npz"), io.load(tmp_path / "d.mat"),
+              io.load(tmp_path / "d.h5", states="run/x", inputs="run/u")]
+    for d in loaded:
+        np.testing.assert_allclose(d.x, x, rtol=1e-15)
+        np.testing.assert_allclose(d.u, u, rtol=1e-15)
+        np.testing.assert_allclose(d.t, t, rtol=1e-15)
+
+
+def test_states_from_separate_one_dimensional_variables(tmp_path, arrays):
+    t, x, _ = arrays
+    np.savez(tmp_path / "d.npz", t=t, p=x[:, 0], q=x[:, 1])
+    d = io.load(tmp_path / "d.npz", states=["p", "q"])
+    np.testing.assert_allclose(d.x, x[:, :2])
+    assert d.state_names == ["p", "q"] and d.u is None
+
+
+def test_errors_name_what_is_wrong(tmp_path, arrays):
+    t, x, _ = arrays
+    np.savez(tmp_path / "d.npz", t=t, x=x)
+    with pytest.raises(UnknownNameError, match="'states'.*not found|variable 'states'"):
+        io.load(tmp_path / "d.npz", states="states")
+    with pytest.raises(UnknownNameError, match="suffix"):
+        io.load(_touch(tmp_path / "d.xyz"))
+    with pytest.raises(FileNotFoundError):
+        io.load(tmp_path / "missing.csv")
+    write_csv(tmp_path / "bad.csv", ["t", "a"], np.c_[t, x[:, 0]])
+    text = (tmp_path / "bad.csv").read_text().replace("\n", "\n", 1).splitlines()
+    text[5] = text[5].split(",")[0] + ",oops"
+    (tmp_path / "bad.csv").write_text("\n".join(text))
+    with pytest.raises(DataError, match="non-numeric"):
+        io.load(tmp_path / "bad.csv")
+    x_nan = x.copy()
+    x_nan[7, 1] = np.nan
+    np.savez(tmp_path / "nan.npz", t=t, x=x_nan)
+    with pytest.raises(DataError, match=r"\(7, 1\)"):
+        io.load(tmp_path / "nan.npz")
+    np.savez(tmp_path / "back.npz", t=t[::-1], x=x)
+    with pytest.raises(DataError, match="increasing"):
+        io.load(tmp_path / "back.npz")
+
+
+def _touch(path):
+    path.write_text("1,2\n")
+    return path

@@ -1,0 +1,53 @@
+"""Automatic STLSQ threshold (BIC over the threshold path) against known true supports."""
+import numpy as np
+import pytest
+
+import discrepancy as dc
+from discrepancy.errors import ParameterError
+
+
+def fit_vdp(x, prior, threshold):
+    return dc.DiscrepancyModel(prior=prior, feature_library=dc.PolynomialLibrary(degree=4),
+                               optimizer=dc.STLSQ(threshold=threshold),
+                               differentiation_method=dc.SavitzkyGolay(31, 3)).fit(x, t=0.01)
+
+
+@pytest.mark.parametrize("noise", [0.01, 0.1])
+def test_auto_threshold_finds_true_support_of_vdp_parameter_case(vdp_data, helpers, noise):
+    """True discrepancy 0.4 x2 - 0.4 x1^2 x2; noise 10x the paper's at the upper end."""
+    prior = helpers.vdp_rhs(0.1)
+    for seed in range(3):
+        x = vdp_data.x + noise * np.random.default_rng(seed).standard_normal(vdp_data.x.shape)
+        model = fit_vdp(x, prior, "auto")
+        names, coef = model.get_feature_names(), model.coefficients()
+        active = {(i, names[j]) for i, j in zip(*np.nonzero(coef), strict=True)}
+        assert active == {(1, "x2"), (1, "x1^2 x2")}
+        assert coef[1, names.index("x2")] == pytest.approx(0.4, rel=0.08)
+
+
+def test_auto_threshold_result_equals_fixed_threshold_it_chose(vdp_data, helpers):
+    x = vdp_data.x + 0.02 * np.random.default_rng(5).standard_normal(vdp_data.x.shape)
+    auto = fit_vdp(x, helpers.vdp_rhs(0.1), "auto")
+    chosen = auto.optimizer_.thresholds_[1]
+    fixed = fit_vdp(x, helpers.vdp_rhs(0.1), float(chosen))
+    np.testing.assert_allclose(auto.coefficients()[1], fixed.coefficients()[1], rtol=1e-12)
+
+
+def test_auto_threshold_on_random_sparse_regressions_recovers_support():
+    rng = np.random.default_rng(11)
+    hits = 0
+    for _ in range(10):
+        theta = rng.standard_normal((4000, 20))
+        xi = np.zeros((20, 2))
+        xi[rng.choice(20, 3, replace=False), 0] = rng.uniform(0.5, 2, 3)
+        xi[rng.choice(20, 4, replace=False), 1] = -rng.uniform(0.5, 2, 4)
+        y = theta @ xi + 0.3 * rng.standard_normal((4000, 2))
+        coef = dc.STLSQ(threshold="auto").fit(theta, y).coef_
+        hits += np.array_equal(coef != 0, xi.T != 0)
+    assert hits >= 9
+
+
+def test_auto_threshold_needs_sums_of_squares_from_fit_gram():
+    theta = np.random.default_rng(0).standard_normal((100, 3))
+    with pytest.raises(ParameterError, match="yy"):
+        dc.STLSQ(threshold="auto").fit_gram(theta.T @ theta, theta.T @ theta[:, :1])
