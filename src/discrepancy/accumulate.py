@@ -1,0 +1,133 @@
+"""Blocked, multi-threaded accumulation of Gram statistics (the hot loop of every fit).
+
+Rows are cut into blocks of :data:`BLOCK_ROWS` counted from the start of a
+trajectory. For each block Θ is formed (small enough to stay in the L2 cache)
+and ``ΘᵀΘ``, ``Θᵀy``, ``Σ y²`` are added to one of :data:`LANES` running sums,
+block ``i`` to lane ``i % LANES``; the lanes are summed in order at the end.
+The result depends only on the rows and the block grid, never on how the rows
+arrived (one array, chunks of any size, any number of threads), so a chunked
+fit gives the bits of the in-memory fit.
+
+Measured (m = 1e6, degree-5 polynomial of 3 variables, p = 56, this project's
+2-core test machine, OpenBLAS): with numpy's default threaded BLAS on a loaded
+machine a 4096-row ``ΘᵀΘ`` took 0.4 to 130 ms (threads spinning against other
+processes); pinned to one BLAS thread it takes 0.45 ms (about 55 GFlop/s), and
+blocks of 2048 to 4096 rows beat 32768 rows (which spill the cache) by 1.5-2x.
+So BLAS runs single-threaded here and parallelism comes from our threads,
+one per lane group.
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from .optimizers.gram import GramStatistics
+
+BLOCK_ROWS = 4096
+LANES = 4
+
+_controller = None
+
+
+def _single_threaded_blas():
+    """Context manager limiting BLAS to one thread (threadpoolctl), created once."""
+    global _controller
+    if _controller is None:
+        from threadpoolctl import ThreadpoolController
+        _controller = ThreadpoolController()
+    return _controller.limit(limits=1, user_api="blas")
+
+
+def default_threads() -> int:
+    """Worker threads: the CPUs this process may use, at most :data:`LANES`."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cpus = os.cpu_count() or 1
+    return max(1, min(LANES, cpus))
+
+
+class BlockAccumulator:
+    """Running Gram statistics of ``Θ = transform(z)`` against targets ``y``.
+
+    Args:
+        transform: ``Z (k, n_variables) -> Θ (k, p)`` (a fitted library's ``transform``).
+        p: number of features; n: number of targets.
+        n_threads: threads to use (default :func:`default_threads`); does not change the result.
+
+    Feed rows of one trajectory with :meth:`add`; every call but the last of a
+    trajectory must hold a whole number of blocks (:class:`~discrepancy.streaming`
+    carries the remainder over), then :meth:`finish_trajectory` before the next one.
+    """
+
+    def __init__(self, transform: Callable[[np.ndarray], np.ndarray], p: int, n: int, *,
+                 n_threads: int | None = None):
+        self.transform = transform
+        self.p, self.n = p, n
+        self.n_threads = default_threads() if n_threads is None else max(1, int(n_threads))
+        self.total = GramStatistics(p, n)
+        self._new_lanes()
+
+    def _new_lanes(self) -> None:
+        self._lanes = [GramStatistics(self.p, self.n) for _ in range(LANES)]
+        self._blocks = 0
+
+    def add(self, z: np.ndarray, y: np.ndarray) -> None:
+        """Add rows ``z`` ``(k, n_variables)`` with targets ``y`` ``(k, n)``."""
+        k = z.shape[0]
+        if k == 0:
+            return
+        starts = list(range(0, k, BLOCK_ROWS))
+        yt = np.ascontiguousarray(y.T)
+        work = [[] for _ in range(LANES)]
+        for b, s in enumerate(starts):
+            work[(self._blocks + b) % LANES].append(s)
+        self._blocks += len(starts)
+        threads = min(self.n_threads, len(starts))
+        with _single_threaded_blas():
+            if threads == 1:
+                for lane, lane_starts in zip(self._lanes, work, strict=True):
+                    self._run(lane, lane_starts, z, yt)
+            else:
+                groups = [list(range(i, LANES, threads)) for i in range(threads)]
+                with ThreadPoolExecutor(threads) as pool:
+                    list(pool.map(lambda g: [self._run(self._lanes[i], work[i], z, yt)
+                                             for i in g], groups))
+
+    def _run(self, lane: GramStatistics, starts: list[int], z: np.ndarray,
+             yt: np.ndarray) -> None:
+        for s in starts:
+            theta = self.transform(z[s:s + BLOCK_ROWS])
+            yb = yt[:, s:s + BLOCK_ROWS]
+            lane.gram += theta.T @ theta
+            lane.rhs += (yb @ theta).T
+            lane.yy += np.einsum("ij,ij->i", yb, yb)
+            lane.count += theta.shape[0]
+
+    def finish_trajectory(self) -> None:
+        """Add the lanes of the current trajectory to :attr:`total`, in lane order."""
+        for lane in self._lanes:
+            add_into(self.total, lane)
+        self._new_lanes()
+
+
+def add_into(target: GramStatistics, other: GramStatistics) -> GramStatistics:
+    """``target += other`` in place; returns ``target``."""
+    target.gram += other.gram
+    target.rhs += other.rhs
+    target.yy += other.yy
+    target.count += other.count
+    return target
+
+
+def accumulate(stats: GramStatistics, transform, z: np.ndarray, y: np.ndarray, *,
+               n_threads: int | None = None) -> GramStatistics:
+    """Add the statistics of one whole trajectory's rows ``z``, ``y`` to ``stats`` in place."""
+    acc = BlockAccumulator(transform, stats.p, stats.n, n_threads=n_threads)
+    acc.total = stats
+    acc.add(z, y)
+    acc.finish_trajectory()
+    return stats

@@ -1,0 +1,371 @@
+"""Chunked fitting: data that arrive in pieces, or do not fit in memory.
+
+What a chunk is
+    A :class:`Chunk` holds consecutive rows of ONE trajectory in time order:
+    ``x`` ``(k, n)`` and optionally ``t`` ``(k,)`` (the times of these rows),
+    ``u`` ``(k, r)`` and ``x_dot`` ``(k, n)``. A plain array is a chunk of ``x``;
+    a mapping with keys among ``x, t, u, x_dot`` is converted. Chunks without
+    ``t`` are placed on the grid ``t = row * step`` with ``step`` the ``t`` given to
+    ``fit`` (default 1), counted from the trajectory's first row, exactly as the
+    in-memory fit does.
+
+What a trajectory is
+    ``model.fit(iterator_of_chunks)`` is one trajectory; a list of such
+    iterators, or a :class:`ChunkSource` (files, see :mod:`discrepancy.data.sources`),
+    gives several. Derivatives never straddle the join of two trajectories.
+
+Exactness
+    A local differentiation method (``halo`` rows each side, e.g. finite
+    differences or Savitzky–Golay) is applied on windows of ``2 halo`` carried
+    rows plus the next chunk, keeping only rows whose stencil lies inside the
+    window (and the true ends of the trajectory), so every derivative is the one
+    the whole trajectory gives. Rows then go through the same fixed block grid
+    as the in-memory fit (:mod:`discrepancy.accumulate`), so the Gram statistics,
+    and the model, equal the in-memory ones (to rounding in the derivative's
+    time step). Global methods (``halo`` None: splines, trend filtering, Kalman)
+    are refused: their derivative at one row depends on the whole trajectory;
+    differentiate first and stream ``x_dot``.
+
+Memory is bounded by about two chunks plus a 4096-row block of Θ.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .accumulate import BLOCK_ROWS, BlockAccumulator
+from .data.trajectory import Trajectory
+from .errors import DataError, ParameterError, ShapeError, describe
+
+FIELDS = ("x", "t", "u", "x_dot")
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """Consecutive rows of one trajectory (see the module docstring).
+
+    Attributes:
+        x: states ``(k, n)``; t: times ``(k,)`` or ``None``; u: inputs ``(k, r)`` or
+        ``None``; x_dot: measured derivatives ``(k, n)`` or ``None``;
+        where: description used in error messages (e.g. ``"run3.h5 rows 0..65535"``).
+    """
+
+    x: np.ndarray
+    t: np.ndarray | None = None
+    u: np.ndarray | None = None
+    x_dot: np.ndarray | None = None
+    where: str | None = None
+
+    @property
+    def n_rows(self) -> int:
+        return self.x.shape[0]
+
+    def rows(self, start: int, stop: int | None = None) -> Chunk:
+        cut = slice(start, stop)
+        return replace(self, **{f: None if getattr(self, f) is None else getattr(self, f)[cut]
+                                for f in FIELDS})
+
+
+class ChunkSource(ABC):
+    """Data as trajectories, each an iterable of :class:`Chunk` in time order."""
+
+    #: total number of rows if known (for the progress bar), else None
+    n_samples: int | None = None
+
+    @abstractmethod
+    def trajectories(self) -> Iterator[Iterable[Chunk]]:
+        """Yield one iterable of chunks per trajectory."""
+
+
+class IterableSource(ChunkSource):
+    """Trajectories given as iterables of chunks (one iterable per trajectory)."""
+
+    def __init__(self, trajectories: list):
+        self._trajectories = trajectories
+
+    def trajectories(self):
+        yield from self._trajectories
+
+
+def _is_dask(x) -> bool:
+    return type(x).__module__.split(".")[0] == "dask"
+
+
+def _is_chunk_stream(x) -> bool:
+    return isinstance(x, (Iterator, ChunkSource))
+
+
+def is_streamed(x) -> bool:
+    """True for input that :func:`fit_streamed` handles instead of the in-memory fit:
+    a dask array, an iterator of chunks, a ChunkSource, or a non-empty list of those."""
+    if isinstance(x, (list, tuple)):
+        return bool(x) and all(_is_dask(e) or _is_chunk_stream(e) for e in x)
+    return _is_dask(x) or _is_chunk_stream(x)
+
+
+def as_source(x) -> ChunkSource:
+    if isinstance(x, ChunkSource):
+        return x
+    if isinstance(x, Iterator):
+        return IterableSource([x])
+    if isinstance(x, (list, tuple)) and all(isinstance(e, ChunkSource) for e in x):
+        return _Joined(list(x))
+    if isinstance(x, (list, tuple)) and all(isinstance(e, Iterator) for e in x):
+        return IterableSource(list(x))
+    raise ParameterError(f"x must be an iterator of chunks, a ChunkSource or a list of either "
+                         f"kind (not mixed); got {describe(x)}")
+
+
+class _Joined(ChunkSource):
+    def __init__(self, sources):
+        self.sources = sources
+        sizes = [s.n_samples for s in sources]
+        self.n_samples = None if None in sizes else sum(sizes)
+
+    def trajectories(self):
+        for s in self.sources:
+            yield from s.trajectories()
+
+
+def as_chunk(item, where: str) -> Chunk:
+    """A :class:`Chunk` from an array (x only), a mapping, or a Chunk."""
+    if isinstance(item, Chunk):
+        return item if item.where else replace(item, where=where)
+    if isinstance(item, Mapping):
+        unknown = sorted(set(item) - set(FIELDS))
+        if unknown or "x" not in item:
+            raise ShapeError(f"{where}: a chunk mapping needs key 'x' and may have {FIELDS}; "
+                             f"got keys {sorted(item)}")
+        return Chunk(**{k: item[k] for k in FIELDS if k in item}, where=where)
+    if isinstance(item, np.ndarray) or hasattr(item, "__array__"):
+        return Chunk(x=item, where=where)
+    raise ShapeError(f"{where}: a chunk must be an array of x, a mapping with keys {FIELDS} or "
+                     f"a Chunk; got {describe(item)}")
+
+
+# ------------------------------------------------------------------ validation
+@dataclass
+class _Layout:
+    """Columns and optional fields fixed by the first chunk; every later chunk must match."""
+
+    n: int
+    r: int
+    has: dict
+
+
+def _check_array(name, a, chunk, offset, *, rows, cols, ndim=2):
+    try:
+        a = np.asarray(a, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ShapeError(f"{chunk.where}: {name} must be numeric; {e}") from None
+    if ndim == 2 and a.ndim == 1 and cols in (None, 1) and name == "u":
+        a = a[:, None]
+    if a.ndim != ndim or (rows is not None and a.shape[0] != rows) or \
+            (cols is not None and a.shape[1] != cols):
+        want = f"({rows if rows is not None else 'k'}" + ("" if ndim == 1 else
+                                                          f", {cols if cols else 'n'}") + ")"
+        raise ShapeError(f"{chunk.where}: {name} must have shape {want} like the chunks before "
+                         f"it; got {a.shape}")
+    bad = ~np.isfinite(a)
+    if bad.any():
+        row, *col = np.argwhere(bad)[0]
+        col_txt = f", column {int(col[0])}" if col else ""
+        raise DataError(f"{chunk.where}: {name} has a non-finite value {a[(row, *col)]} at row "
+                        f"{int(row)} of the chunk (row {offset + int(row)} of the trajectory"
+                        f"{col_txt}); {int(bad.sum())} non-finite values in this chunk. "
+                        "Nothing was fitted; clean or drop those rows first")
+    return a
+
+
+def _validate(chunk: Chunk, layout: _Layout, offset: int, step: float, t_last) -> Chunk:
+    x = _check_array("x", chunk.x, chunk, offset, rows=None, cols=layout.n)
+    k = x.shape[0]
+    for f in ("t", "u", "x_dot"):
+        if (getattr(chunk, f) is None) == layout.has[f]:
+            state = "has no" if layout.has[f] else "has"
+            raise ShapeError(f"{chunk.where}: chunk {state} {f}, unlike the first chunk; every "
+                             "chunk must carry the same fields")
+    u = None if chunk.u is None else _check_array("u", chunk.u, chunk, offset, rows=k,
+                                                  cols=layout.r)
+    xd = None if chunk.x_dot is None else _check_array("x_dot", chunk.x_dot, chunk, offset,
+                                                       rows=k, cols=layout.n)
+    if chunk.t is None:
+        t = np.arange(offset, offset + k) * step
+    else:
+        t = _check_array("t", chunk.t, chunk, offset, rows=k, cols=None, ndim=1)
+        steps = np.diff(t if t_last is None else np.r_[t_last, t])
+        if np.any(steps <= 0):
+            i = int(np.argmax(steps <= 0))
+            raise DataError(f"{chunk.where}: t must increase strictly, also across chunks; "
+                            f"it stops increasing at row {offset + i - (t_last is None) + 1} "
+                            "of the trajectory")
+    return Chunk(x, t, u, xd, chunk.where)
+
+
+def _validated(items: Iterable, traj: int, step: float, layout: _Layout | None):
+    """Yield validated chunks of trajectory ``traj`` (creating the layout from the first)."""
+    offset, t_last = 0, None
+    for i, item in enumerate(items):
+        where = f"chunk {i} of trajectory {traj}"
+        chunk = as_chunk(item, where)
+        if chunk.where != where:
+            chunk = replace(chunk, where=f"{where} ({chunk.where})")
+        if layout is None:
+            x = np.asarray(chunk.x)
+            u = None if chunk.u is None else np.asarray(chunk.u)
+            if x.ndim != 2:
+                raise ShapeError(f"{where}: x must be 2-D (rows, states); got shape {x.shape}")
+            layout = _Layout(x.shape[1], 0 if u is None else (1 if u.ndim == 1 else u.shape[1]),
+                             {f: getattr(chunk, f) is not None for f in ("t", "u", "x_dot")})
+        chunk = _validate(chunk, layout, offset, step, t_last)
+        if chunk.n_rows:
+            yield layout, chunk
+            offset += chunk.n_rows
+            t_last = chunk.t[-1]
+
+
+# ------------------------------------------------------------------ stitching
+def _concat(a: Chunk, b: Chunk) -> Chunk:
+    return Chunk(**{f: None if getattr(a, f) is None else
+                    np.concatenate([getattr(a, f), getattr(b, f)]) for f in FIELDS},
+                 where=b.where)
+
+
+def _with_last(it):
+    """Yield ``(item, is_last)`` looking one item ahead."""
+    it = iter(it)
+    try:
+        prev = next(it)
+    except StopIteration:
+        return
+    for item in it:
+        yield prev, False
+        prev = item
+    yield prev, True
+
+
+def residual_rows(model, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Yield ``(z, y)`` for consecutive rows of one trajectory, equal to ``model.residual``
+    of the whole trajectory (the model must be set up; chunks validated)."""
+    for xs, xd, lo, hi in _stitched(chunks, model.differentiation_method_):
+        if hi > lo:
+            yield model.residual(Trajectory(xs.t[lo:hi], xs.x[lo:hi], None if xs.u is None
+                                            else xs.u[lo:hi], xd[lo:hi]))
+
+
+def _stitched(chunks, method):
+    """Yield ``(window, x_dot_or_smoothed, lo, hi)``; rows ``lo:hi`` of the window are exact."""
+    window, first = None, True
+    for chunk, last in _with_last(chunks):
+        if chunk.x_dot is not None:
+            yield chunk, chunk.x_dot, 0, chunk.n_rows
+            continue
+        h = method.halo
+        if h is None:
+            raise ParameterError(
+                f"{method!r} is a global differentiation method (the derivative at one row "
+                "depends on the whole trajectory), so it cannot be applied chunk by chunk; "
+                "use FiniteDifference() or SavitzkyGolay(), or compute x_dot first and stream "
+                "it with the chunks")
+        window = chunk if window is None else _concat(window, chunk)
+        if not last and window.n_rows < max(method.min_samples, 2 * h + 1):
+            continue
+        xs, xd = method(window.x, window.t)
+        lo, hi = (0 if first else h), (window.n_rows if last else window.n_rows - h)
+        smooth = replace(window, x=xs)
+        yield smooth, xd, lo, hi
+        window, first = window.rows(window.n_rows - 2 * h), False
+
+
+# ------------------------------------------------------------------ fitting
+class _RowFeeder:
+    """Passes rows to a BlockAccumulator in whole blocks, carrying the remainder over."""
+
+    def __init__(self, acc: BlockAccumulator, limit: int = 16 * BLOCK_ROWS):
+        self.acc, self.limit = acc, limit
+        self.z, self.y, self.rows = [], [], 0
+
+    def add(self, z, y):
+        self.z.append(z)
+        self.y.append(y)
+        self.rows += z.shape[0]
+        if self.rows >= self.limit:
+            self._flush(whole_blocks=True)
+
+    def _flush(self, whole_blocks):
+        z, y = np.concatenate(self.z), np.concatenate(self.y)
+        cut = (z.shape[0] // BLOCK_ROWS) * BLOCK_ROWS if whole_blocks else z.shape[0]
+        self.acc.add(z[:cut], y[:cut])
+        self.z, self.y, self.rows = [z[cut:]], [y[cut:]], z.shape[0] - cut
+
+    def end_trajectory(self):
+        if self.rows:
+            self._flush(whole_blocks=False)
+        self.z, self.y, self.rows = [], [], 0
+        self.acc.finish_trajectory()
+
+
+def step_of(t) -> float:
+    """The time step for chunks without times: ``t`` (a positive number) or 1."""
+    if t is None:
+        return 1.0
+    if np.ndim(t) != 0:
+        raise ParameterError("with chunked x, t must be the time step (a number); give "
+                             "per-row times inside the chunks (Chunk(x, t=...))")
+    if not np.isfinite(float(t)) or float(t) <= 0:
+        raise DataError(f"t as a time step must be a positive finite number; got {t}")
+    return float(t)
+
+
+def stream_statistics(model, source: ChunkSource, step: float, *, progress: bool | None = None,
+                      n_threads: int | None = None):
+    """Set up ``model`` from the first chunk and return the Gram statistics of all rows."""
+    from tqdm.auto import tqdm
+
+    acc = feeder = layout = None
+    with tqdm(total=source.n_samples, unit=" samples", unit_scale=True, desc="fit",
+              disable=None if progress is None else not progress) as bar:
+        for k, items in enumerate(source.trajectories()):
+            stream = _validated(items, k, step, layout)
+            first = next(stream, None)
+            if first is None:
+                raise ShapeError(f"trajectory {k} of x has no rows")
+            if layout is None:
+                layout = first[0]
+                model._setup(layout.n, layout.r)
+                acc = BlockAccumulator(model.feature_library_.transform,
+                                       model.feature_library_.n_features_, layout.n,
+                                       n_threads=n_threads)
+                feeder = _RowFeeder(acc)
+
+            def counted(first=first, stream=stream):
+                for _, chunk in _chain(first, stream):
+                    yield chunk
+                    bar.update(chunk.n_rows)
+
+            for z, y in residual_rows(model, counted()):
+                feeder.add(z, y)
+            feeder.end_trajectory()
+    if acc is None:
+        raise ShapeError("x holds no trajectories")
+    return acc.total
+
+
+def _chain(first, rest):
+    yield first
+    yield from rest
+
+
+def fit_streamed(model, x, *, t=None, u=None, x_dot=None):
+    """``model.fit`` for streamed input (see the module docstring); returns the model."""
+    if _is_dask(x) or (isinstance(x, (list, tuple)) and x and all(_is_dask(e) for e in x)):
+        from .distributed import fit_dask
+        return fit_dask(model, x, t=t, u=u, x_dot=x_dot)
+    if u is not None or x_dot is not None:
+        raise ParameterError("with chunked x, give u and x_dot inside the chunks "
+                             "(Chunk(x, u=..., x_dot=...)), not as separate arguments")
+    stats = stream_statistics(model, as_source(x), step_of(t))
+    return model._fit_statistics(stats)
