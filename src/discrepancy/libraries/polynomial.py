@@ -43,12 +43,21 @@ class PolynomialLibrary(BaseLibrary):
         return [sp.Mul(*[symbols[i] for i in c]) for c in self._monomials]
 
     def _evaluate(self, Zs):
-        """Each monomial is its prefix times one variable: one multiply per column."""
-        m = Zs.shape[0]
-        out = np.empty((m, len(self._monomials)))
-        column = {(): np.ones(m)}
+        """Each monomial is its prefix times one variable: one multiply per column.
+
+        Columns are written as contiguous rows of a ``(p, m)`` array and returned
+        transposed (Fortran order, same values): for m = 4096 rows, degree 5 in 3
+        variables this measured 0.11 ms against 0.3-1.2 ms for strided column writes.
+        """
+        zt = np.ascontiguousarray(Zs.T)
+        out = np.empty((len(self._monomials), Zs.shape[0]))
+        row = {}
         for j, c in enumerate(self._monomials):
-            if c not in column:
-                column[c] = column[c[:-1]] * Zs[:, c[-1]]
-            out[:, j] = column[c]
-        return out
+            if not c:
+                out[j] = 1.0
+            elif len(c) == 1:
+                out[j] = zt[c[0]]
+            else:
+                np.multiply(out[row[c[:-1]]], zt[c[-1]], out=out[j])
+            row[c] = j
+        return out.T
