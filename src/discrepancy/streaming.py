@@ -213,8 +213,11 @@ def _validated(items: Iterable, traj: int, step: float, layout: _Layout | None):
         chunk = as_chunk(item, where)
         if chunk.where != where:
             chunk = replace(chunk, where=f"{where} ({chunk.where})")
-        if layout is None:
+        if layout is None or layout.has is None:
             x = np.asarray(chunk.x)
+            if layout is not None and x.ndim == 2 and x.shape[1] != layout.n:
+                raise ShapeError(f"{where}: x has {x.shape[1]} columns; the model has "
+                                 f"{layout.n} states")
             u = None if chunk.u is None else np.asarray(chunk.u)
             if x.ndim != 2:
                 raise ShapeError(f"{where}: x must be 2-D (rows, states); got shape {x.shape}")
@@ -284,7 +287,7 @@ def _stitched(chunks, method):
 class _RowFeeder:
     """Passes rows to a BlockAccumulator in whole blocks, carrying the remainder over."""
 
-    def __init__(self, acc: BlockAccumulator, limit: int = 16 * BLOCK_ROWS):
+    def __init__(self, acc: BlockAccumulator, limit: int = 8 * BLOCK_ROWS):
         self.acc, self.limit = acc, limit
         self.z, self.y, self.rows = [], [], 0
 
@@ -320,12 +323,23 @@ def step_of(t) -> float:
     return float(t)
 
 
+def peek_layout(source: ChunkSource) -> tuple[int, int]:
+    """``(n_states, n_inputs)`` from the first chunk of ``source``."""
+    for k, items in enumerate(source.trajectories()):
+        for layout, _ in _validated(items, k, 1.0, None):
+            return layout.n, layout.r
+    raise ShapeError("x holds no rows")
+
+
 def stream_statistics(model, source: ChunkSource, step: float, *, progress: bool | None = None,
-                      n_threads: int | None = None):
-    """Set up ``model`` from the first chunk and return the Gram statistics of all rows."""
+                      n_threads: int | None = None, setup: bool = True):
+    """Gram statistics of all rows of ``source``. With ``setup`` the model is set up from
+    the first chunk; otherwise it must be set up already and the chunks must match it."""
     from tqdm.auto import tqdm
 
     acc = feeder = layout = None
+    if not setup:
+        layout = _Layout(model.n_states_, model.n_inputs_, None)
     with tqdm(total=source.n_samples, unit=" samples", unit_scale=True, desc="fit",
               disable=None if progress is None else not progress) as bar:
         for k, items in enumerate(source.trajectories()):
@@ -333,9 +347,14 @@ def stream_statistics(model, source: ChunkSource, step: float, *, progress: bool
             first = next(stream, None)
             if first is None:
                 raise ShapeError(f"trajectory {k} of x has no rows")
-            if layout is None:
+            if acc is None:
                 layout = first[0]
-                model._setup(layout.n, layout.r)
+                if setup:
+                    model._setup(layout.n, layout.r)
+                elif (layout.n, layout.r) != (model.n_states_, model.n_inputs_):
+                    raise ShapeError(f"trajectory {k}: {layout.n} states and {layout.r} inputs; "
+                                     f"the model was set up for {model.n_states_} and "
+                                     f"{model.n_inputs_}")
                 acc = BlockAccumulator(model.feature_library_.transform,
                                        model.feature_library_.n_features_, layout.n,
                                        n_threads=n_threads)

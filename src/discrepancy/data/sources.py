@@ -1,0 +1,237 @@
+"""Chunk sources: read trajectories from files piece by piece (for streamed fits).
+
+Every source is a :class:`~discrepancy.streaming.ChunkSource`: ``model.fit(source, t=dt)``
+streams it. Files are read ``chunk_size`` rows at a time, so memory stays bounded
+however large they are.
+
+* :class:`HDF5Source` (h5py) and :class:`ZarrSource` (zarr): named datasets ``x``
+  ``(m, n)`` and optionally ``t`` ``(m,)``, ``u`` ``(m, r)``, ``x_dot`` ``(m, n)``. Each file
+  is one trajectory, or ``lengths`` splits its rows into several consecutive ones.
+* :class:`NPZFiles` and :class:`CSVFiles`: a folder (or list) of files, each one
+  trajectory, or with ``one_trajectory=True`` consecutive pieces of one trajectory
+  in sorted name order.
+"""
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ShapeError, UnknownNameError
+from ..streaming import Chunk, ChunkSource
+
+DEFAULT_CHUNK = 65536
+FIELDS = ("x", "t", "u", "x_dot")
+
+
+def _is_zarr_store(path: Path) -> bool:
+    return any((path / marker).exists() for marker in ("zarr.json", ".zgroup", ".zarray"))
+
+
+def _paths(paths, pattern: str) -> list[Path]:
+    if isinstance(paths, (str, Path)) and Path(paths).is_dir() and not _is_zarr_store(Path(paths)):
+        found = sorted(Path(paths).glob(pattern))
+        if not found:
+            raise FileNotFoundError(f"folder {paths} holds no files matching {pattern!r}")
+        return found
+    out = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+    for p in out:
+        if not p.exists():
+            raise FileNotFoundError(f"data file {p} does not exist")
+    return out
+
+
+class _ArrayFiles(ChunkSource):
+    """Shared logic of HDF5 and zarr: named array datasets sliced by rows."""
+
+    def __init__(self, paths, *, x: str = "x", t: str | None = None, u: str | None = None,
+                 x_dot: str | None = None, chunk_size: int = DEFAULT_CHUNK,
+                 lengths: int | Sequence[int] | None = None):
+        self.paths = _paths(paths, self._pattern)
+        self.names = {"x": x, "t": t, "u": u, "x_dot": x_dot}
+        self.chunk_size = int(chunk_size)
+        self.lengths = lengths
+        self.n_samples = 0
+        for path in self.paths:  # fail early on names and shapes, before any fitting
+            with self._open(path) as arrays:
+                self.n_samples += self._rows(path, arrays)
+
+    def _rows(self, path: Path, arrays) -> int:
+        m = None
+        for field, name in self.names.items():
+            if name is None:
+                continue
+            if name not in arrays:
+                raise UnknownNameError(f"{path.name}: no dataset {name!r} (for {field}); the file "
+                                       f"has: {', '.join(arrays.available()) or 'nothing'}")
+            shape = arrays[name].shape
+            if m is None:
+                m = shape[0]
+            if shape[0] != m or len(shape) != (1 if field == "t" else 2):
+                raise ShapeError(f"{path.name}: dataset {name!r} ({field}) has shape {shape}; "
+                                 f"expected {m} rows{' (1-D)' if field == 't' else ' (2-D)'} like "
+                                 f"{self.names['x']!r}")
+        return m
+
+    def _splits(self, m: int, path: Path) -> list[tuple[int, int]]:
+        if self.lengths is None:
+            return [(0, m)]
+        if np.ndim(self.lengths) == 0:
+            edges = list(range(0, m, int(self.lengths))) + [m]
+        else:
+            edges = [0, *np.cumsum([int(v) for v in self.lengths]).tolist()]
+            if edges[-1] != m:
+                raise ShapeError(f"{path.name}: lengths add up to {edges[-1]} rows; the file "
+                                 f"has {m}")
+        return list(itertools.pairwise(edges))
+
+    def trajectories(self):
+        for path in self.paths:
+            with self._open(path) as arrays:
+                m = arrays[self.names["x"]].shape[0]
+                for a, b in self._splits(m, path):
+                    yield self._chunks(path, arrays, a, b)
+
+    def _chunks(self, path, arrays, a, b):
+        for s in range(a, b, self.chunk_size):
+            e = min(s + self.chunk_size, b)
+            parts = {f: np.asarray(arrays[name][s:e]) for f, name in self.names.items()
+                     if name is not None}
+            yield Chunk(**parts, where=f"{path.name} rows {s}..{e - 1}")
+
+
+class _Opened:
+    """Context manager giving name -> array access to an open file."""
+
+    def __init__(self, handle, listing):
+        self.handle, self.listing = handle, listing
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        close = getattr(self.handle, "close", None)
+        if close:
+            close()
+
+    def __contains__(self, name):
+        try:
+            self.handle[name]
+        except KeyError:
+            return False
+        return True
+
+    def __getitem__(self, name):
+        return self.handle[name]
+
+    def available(self):
+        return self.listing()
+
+
+class HDF5Source(_ArrayFiles):
+    """Trajectories in HDF5 files (h5py). Args: ``paths`` a file, a list or a folder of
+    ``*.h5``; ``x, t, u, x_dot`` dataset names (paths like ``"run1/x"`` allowed);
+    ``chunk_size`` rows per read; ``lengths`` trajectory lengths within a file."""
+
+    _pattern = "*.h5"
+
+    def _open(self, path):
+        import h5py
+
+        f = h5py.File(path, "r")
+
+        def listing():
+            names = []
+            f.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
+            return names
+        return _Opened(f, listing)
+
+
+class ZarrSource(_ArrayFiles):
+    """Trajectories in zarr groups (folders). Arguments as :class:`HDF5Source`."""
+
+    _pattern = "*.zarr"
+
+    def _open(self, path):
+        import zarr
+
+        g = zarr.open_group(str(path), mode="r")
+        return _Opened(g, lambda: sorted(k for k, _ in g.arrays()))
+
+
+class _TableFiles(ChunkSource):
+    def __init__(self, paths, *, x, t=None, u=None, x_dot=None, chunk_size=DEFAULT_CHUNK,
+                 one_trajectory: bool = False):
+        self.paths = _paths(paths, self._pattern)
+        self.names = {"x": x, "t": t, "u": u, "x_dot": x_dot}
+        self.chunk_size = int(chunk_size)
+        self.one_trajectory = one_trajectory
+        self.n_samples = None
+
+    def trajectories(self):
+        if self.one_trajectory:
+            yield (c for p in self.paths for c in self._file_chunks(p))
+        else:
+            for p in self.paths:
+                yield self._file_chunks(p)
+
+    def _missing(self, path, have):
+        for field, name in self.names.items():
+            for n in ([] if name is None else [name] if isinstance(name, str) else name):
+                if n not in have:
+                    raise UnknownNameError(f"{path.name}: no {self._what} {n!r} (for {field}); "
+                                           f"it has: {', '.join(have)}")
+
+
+class NPZFiles(_TableFiles):
+    """NPZ files (``numpy.load``, no pickles) with arrays named by ``x, t, u, x_dot``
+    (default ``x="x"``). Each file is loaded whole, then cut into chunks."""
+
+    _pattern = "*.npz"
+    _what = "array"
+
+    def __init__(self, paths, *, x="x", **kwargs):
+        super().__init__(paths, x=x, **kwargs)
+
+    def _file_chunks(self, path):
+        with np.load(path, allow_pickle=False) as f:
+            self._missing(path, list(f.files))
+            data = {k: f[n] for k, n in self.names.items() if n is not None}
+        m = data["x"].shape[0]
+        for s in range(0, m, self.chunk_size):
+            yield Chunk(**{k: v[s:s + self.chunk_size] for k, v in data.items()},
+                        where=f"{path.name} rows {s}..{min(s + self.chunk_size, m) - 1}")
+
+
+class CSVFiles(_TableFiles):
+    """CSV files with a header row. ``x`` (and ``u``, ``x_dot``) are lists of column names,
+    ``t`` one column name. Read ``chunk_size`` lines at a time."""
+
+    _pattern = "*.csv"
+    _what = "column"
+
+    def _file_chunks(self, path):
+        with open(path, newline="") as fh:
+            header = [h.strip() for h in fh.readline().strip().split(",")]
+            self._missing(path, header)
+            cols = {k: ([header.index(n)] if isinstance(n, str) else [header.index(c) for c in n])
+                    for k, n in self.names.items() if n is not None}
+            start = 0
+            while True:
+                lines = list(itertools.islice(fh, self.chunk_size))
+                if not lines:
+                    return
+                try:
+                    block = np.loadtxt(lines, delimiter=",", ndmin=2)
+                except ValueError as e:
+                    raise ShapeError(f"{path.name} lines {start + 2}..{start + len(lines) + 1}: "
+                                     f"not a numeric table with {len(header)} columns ({e})") \
+                        from None
+                if block.shape[1] != len(header):
+                    raise ShapeError(f"{path.name} lines {start + 2}..: {block.shape[1]} columns; "
+                                     f"the header has {len(header)}")
+                parts = {k: block[:, c] if k != "t" else block[:, c[0]] for k, c in cols.items()}
+                yield Chunk(**parts, where=f"{path.name} rows {start}..{start + len(lines) - 1}")
+                start += len(lines)

@@ -1,0 +1,174 @@
+"""Gram statistics as a Dask reduction: the same fit on threads, processes or a cluster.
+
+``model.fit(x)`` with ``x`` a ``dask.array`` (``(m, n)``, or a list of them, one per
+trajectory) computes, for every row block, the block's ``ΘᵀΘ``, ``Θᵀy``, ``Σy²``
+and row count with ``map_blocks`` (``map_overlap`` with ``halo`` rows each side
+when derivatives are estimated, so windows straddling block edges are exact),
+and sums them with a tree reduction (``sum(split_every=...)``). Only the p×p
+result comes back to the caller, where the usual optimizer solves it. Which
+scheduler runs the graph is Dask's choice: the threads of this process by
+default, or a ``distributed`` cluster when a ``Client`` is active. A worker lost
+mid-fit is handled by Dask recomputing its blocks from their inputs; every block
+is a pure function of its rows, so nothing is lost or counted twice.
+
+:func:`fit_sources` does the same for a list of files (one ``dask.delayed``
+task per :class:`~discrepancy.streaming.ChunkSource`, each streamed on a worker).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .accumulate import BlockAccumulator
+from .data.trajectory import Trajectory
+from .errors import ParameterError, ShapeError, describe
+from .optimizers.gram import GramStatistics
+from .streaming import step_of
+
+SPLIT_EVERY = 8
+
+
+def _pack(stats: GramStatistics) -> np.ndarray:
+    return np.concatenate([stats.gram.ravel(), stats.rhs.ravel(), stats.yy, [stats.count]])
+
+
+def _unpack(v: np.ndarray, p: int, n: int) -> GramStatistics:
+    s = GramStatistics(p, n)
+    s.gram = v[:p * p].reshape(p, p).copy()
+    s.rhs = v[p * p:p * p + p * n].reshape(p, n).copy()
+    s.yy = v[p * p + p * n:p * p + p * n + n].copy()
+    s.count = int(round(v[-1]))
+    return s
+
+
+def _block(rows, x, *rest, model, step, halo, n_total):
+    """Packed statistics ``(1, L)`` of one row block (``rows``: global row numbers)."""
+    rows = rows.ravel()
+    u = rest[0] if model.n_inputs_ else None
+    xd = rest[-1] if len(rest) > (1 if model.n_inputs_ else 0) else None
+    t = rows * step
+    if xd is None:
+        xs, xd = model.differentiation_method_(x, t)
+        lo = 0 if rows[0] == 0 else halo
+        hi = len(rows) if rows[-1] == n_total - 1 else len(rows) - halo
+    else:
+        xs, lo, hi = x, 0, len(rows)
+    z, y = model.residual(Trajectory(t[lo:hi], xs[lo:hi], None if u is None else u[lo:hi],
+                                     xd[lo:hi]))
+    acc = BlockAccumulator(model.feature_library_.transform, model.feature_library_.n_features_,
+                           model.n_states_, n_threads=1)
+    acc.add(z, y)
+    acc.finish_trajectory()
+    return _pack(acc.total)[None, :]
+
+
+def _as_dask(name, a, like, cols):
+    import dask.array as da
+
+    if a is None:
+        return None
+    a = a if isinstance(a, da.Array) else da.from_array(np.asarray(a, dtype=float))
+    if a.ndim == 1 and name == "u":
+        a = a[:, None]
+    if a.ndim != 2 or a.shape[0] != like.shape[0] or (cols is not None and a.shape[1] != cols):
+        raise ShapeError(f"{name} must be ({like.shape[0]}, {cols or 'r'}) like x; "
+                         f"got {describe(a)}")
+    return a.astype(float).rechunk((like.chunks[0], -1))
+
+
+def _trajectory_graph(model, x, u, xd, step):
+    """Dask array ``(L,)``: packed statistics of one trajectory."""
+    import dask.array as da
+
+    m = x.shape[0]
+    x = x.astype(float).rechunk({1: -1})
+    rows = da.arange(m, chunks=(x.chunks[0],))[:, None].astype(float)
+    args = [a for a in (x, u, xd) if a is not None]
+    p, n = model.feature_library_.n_features_, model.n_states_
+    out_chunks = (1, p * p + p * n + n + 1)
+    halo = 0
+    if xd is None:
+        halo = model.differentiation_method_.halo
+        if halo is None:
+            raise ParameterError(f"{model.differentiation_method_!r} is a global method; Dask "
+                                 "fits need a local one (FiniteDifference, SavitzkyGolay) or x_dot")
+        need = max(model.differentiation_method_.min_samples, 2 * halo + 1)
+        if min(x.chunks[0]) < need:
+            size = max(need, m // max(1, len(x.chunks[0])))
+            x = x.rechunk({0: size})
+            rows = rows.rechunk({0: x.chunks[0]})
+            args = [a.rechunk({0: x.chunks[0]}) for a in [x, *args[1:]]]
+        blocks = da.map_overlap(_block, rows, *args, depth={0: halo, 1: 0}, boundary="none",
+                                trim=False, align_arrays=False, dtype=float,
+                                chunks=out_chunks, model=model, step=step, halo=halo,
+                                n_total=m, meta=np.empty((0, 0)))
+    else:
+        blocks = da.map_blocks(_block, rows, *args, dtype=float, chunks=out_chunks,
+                               model=model, step=step, halo=0, n_total=m,
+                               meta=np.empty((0, 0)))
+    return blocks.sum(axis=0, split_every=SPLIT_EVERY)
+
+
+def fit_dask(model, x, *, t=None, u=None, x_dot=None):
+    """``model.fit`` on dask arrays (``x`` one array or a list, one per trajectory)."""
+    import dask
+
+    xs = list(x) if isinstance(x, (list, tuple)) else [x]
+    us = _per_trajectory("u", u, len(xs))
+    xds = _per_trajectory("x_dot", x_dot, len(xs))
+    if xs[0].ndim != 2:
+        raise ShapeError(f"x must be 2-D (samples, states); got {describe(xs[0])}")
+    n = xs[0].shape[1]
+    r = 0 if us[0] is None else (1 if np.ndim(us[0]) == 1 else us[0].shape[1])
+    model._setup(n, r)
+    step = step_of(t)
+    graphs = []
+    for k, (xk, uk, xdk) in enumerate(zip(xs, us, xds, strict=True)):
+        if xk.ndim != 2 or xk.shape[1] != n:
+            raise ShapeError(f"x[{k}] must have shape (m, {n}); got {describe(xk)}")
+        graphs.append(_trajectory_graph(model, xk, _as_dask("u", uk, xk, r or None),
+                                        _as_dask("x_dot", xdk, xk, n), step))
+    (total,) = dask.compute(sum(graphs[1:], graphs[0]))
+    p = model.feature_library_.n_features_
+    return model._fit_statistics(_unpack(np.asarray(total), p, n))
+
+
+def _per_trajectory(name, value, k):
+    if isinstance(value, (list, tuple)):
+        if len(value) != k:
+            raise ShapeError(f"{name} must be a list of {k} arrays (one per trajectory of x); "
+                             f"got {len(value)}")
+        return list(value)
+    if value is not None and k > 1:
+        raise ShapeError(f"{name} must be a list when x is a list of {k} trajectories")
+    return [value] * k
+
+
+def _source_stats(model, source, step):
+    from .streaming import stream_statistics
+
+    return _pack(stream_statistics(model, source, step, progress=False, setup=False,
+                                   n_threads=1))
+
+
+def fit_sources(model, sources, *, t=None):
+    """Fit ``model`` on a list of :class:`~discrepancy.streaming.ChunkSource` (e.g. one
+    :class:`~discrepancy.data.sources.HDF5Source` per file), one ``dask.delayed`` task
+    each, summed as a tree. Returns the model."""
+    import dask
+    from dask import delayed
+
+    from .streaming import peek_layout
+
+    sources = list(sources)
+    if not sources:
+        raise ShapeError("sources must hold at least one ChunkSource; got an empty list")
+    n, r = peek_layout(sources[0])
+    model._setup(n, r)
+    step = step_of(t)
+    parts = [delayed(_source_stats)(model, s, step) for s in sources]
+    while len(parts) > 1:
+        parts = [delayed(sum)(parts[i:i + SPLIT_EVERY]) for i in range(0, len(parts),
+                                                                         SPLIT_EVERY)]
+    (total,) = dask.compute(parts[0])
+    p = model.feature_library_.n_features_
+    return model._fit_statistics(_unpack(np.asarray(total), p, n))
