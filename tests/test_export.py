@@ -70,8 +70,6 @@ def test_fit_is_exact(sympy_model):
     assert not np.any(sympy_model.coefficients()[0])
 
 
-@pytest.mark.xfail(strict=True, reason="symbolic._NamePrinter._print_Mul prints a coefficient "
-                   "of -1 as '-1 x2^2', so exp(-x2**2) is named 'exp(-1 x2^2)'")
 def test_feature_names_of_negated_terms(sympy_model):
     names = sympy_model.get_feature_names()
     assert "exp(-x2^2)" in names
@@ -90,9 +88,6 @@ def test_to_casadi_equals_predict_at_random_states(sympy_model):
     np.testing.assert_allclose(got, true_rhs(x, uu), rtol=1e-8, atol=1e-8)
 
 
-@pytest.mark.xfail(strict=True, reason="models/export.py _part defaults to 'discrepancy' for a "
-                   "callable prior, so to_casadi() silently returns g as 'xdot' instead of "
-                   "refusing (the documented contract: to_casadi needs a sympy prior)")
 def test_to_casadi_default_refuses_a_callable_prior(samples):
     model = fitted(prior_callable, samples)
     with pytest.raises(ExportError, match="callable"):

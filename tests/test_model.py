@@ -123,9 +123,7 @@ def test_trajectories_in_a_list_are_not_differentiated_across_joins(helpers):
 
 @pytest.mark.parametrize("lengths", [
     (600, 600),
-    pytest.param((600, 400), marks=pytest.mark.xfail(
-        strict=True, reason="as_trajectories calls np.ndim(t) on a ragged list of time arrays "
-        "and numpy raises ValueError (inhomogeneous shape)"))])
+    (600, 400)])
 def test_trajectories_with_their_own_times(helpers, lengths):
     f = helpers.vdp_rhs(0.5)
     ts = [np.arange(lengths[0]) * 0.01, np.arange(lengths[1]) * 0.02 + 3.0]

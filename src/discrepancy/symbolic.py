@@ -122,8 +122,24 @@ def to_data(expr: sp.Expr):
     raise ExportError(f"cannot store expression {expr}: node type {name} is not supported")
 
 
-def from_data(data, *, where: str = "expression", depth: int = 0) -> sp.Expr:
-    """Rebuild an expression from :func:`to_data` output, refusing anything else."""
+MAX_INTEGER = 10**15   # integers in stored rationals
+MAX_EXPONENT = 64      # numeric exponents: keeps sympy's exact arithmetic small
+
+
+def _bounded(expr, bad):
+    """Refuse numbers beyond float range (they can only come from a tampered file)."""
+    if expr.is_Number and not np.isfinite(float(expr)):
+        raise bad("a number in the expression is beyond floating-point range")
+    return expr
+
+
+def from_data(data, *, where: str = "expression", depth: int = 0,
+              functions: Sequence[str] | None = None) -> sp.Expr:
+    """Rebuild an expression from :func:`to_data` output, refusing anything else.
+
+    ``functions`` lists the user function names allowed in ``fn`` nodes (``None``: any).
+    Numbers are bounded, so a small tampered file cannot make sympy compute huge integers.
+    """
     def bad(why):
         return ModelFileError(f"{where}: {why}; the model file is corrupted or was edited")
     if depth > 64:
@@ -133,16 +149,17 @@ def from_data(data, *, where: str = "expression", depth: int = 0) -> sp.Expr:
     tag, args = data[0], data[1:]
 
     def sub(a):
-        return from_data(a, where=where, depth=depth + 1)
+        return from_data(a, where=where, depth=depth + 1, functions=functions)
 
     if tag == "sym":
         if len(args) != 1 or not isinstance(args[0], str) or not IDENTIFIER.match(args[0]):
             raise bad(f"symbol name must be an identifier, got {args!r:.60}")
         return symbol(args[0])
     if tag == "num":
-        if len(args) != 2 or not all(isinstance(a, int) and not isinstance(a, bool) for a in args) \
-                or args[1] == 0:
-            raise bad(f"rational must be two integers with q != 0, got {args!r:.60}")
+        if len(args) != 2 or not all(isinstance(a, int) and not isinstance(a, bool)
+                                     and abs(a) <= MAX_INTEGER for a in args) or args[1] == 0:
+            raise bad(f"rational must be two integers of at most {MAX_INTEGER} with q != 0, "
+                      f"got {str(args)[:60]}")
         return sp.Rational(args[0], args[1])
     if tag == "float":
         if len(args) != 1 or not isinstance(args[0], (int, float)) or not np.isfinite(args[0]):
@@ -152,11 +169,16 @@ def from_data(data, *, where: str = "expression", depth: int = 0) -> sp.Expr:
         if len(args) < 2:
             raise bad(f"{tag} needs at least two operands")
         parts = [sub(a) for a in args]
-        return sp.Add(*parts) if tag == "add" else sp.Mul(*parts)
+        return _bounded(sp.Add(*parts) if tag == "add" else sp.Mul(*parts), bad)
     if tag == "pow":
         if len(args) != 2:
             raise bad("pow needs a base and an exponent")
-        return sp.Pow(sub(args[0]), sub(args[1]))
+        base, exponent = sub(args[0]), sub(args[1])
+        if exponent.is_number and not (exponent.is_Rational and abs(exponent.p) <= MAX_EXPONENT
+                                       and exponent.q <= MAX_EXPONENT
+                                       or exponent.is_Float and abs(exponent) <= MAX_EXPONENT):
+            raise bad(f"numeric exponents must be at most {MAX_EXPONENT} in size")
+        return _bounded(sp.Pow(base, exponent), bad)
     if tag == "fn":
         if not args or not isinstance(args[0], str) or not IDENTIFIER.match(args[0]):
             raise bad(f"function name must be an identifier, got {args[:1]!r:.60}")
@@ -164,7 +186,9 @@ def from_data(data, *, where: str = "expression", depth: int = 0) -> sp.Expr:
         if name in FUNCTIONS:
             if len(fargs) != 1:
                 raise bad(f"{name} takes one argument, got {len(fargs)}")
-            return FUNCTIONS[name][0](fargs[0])
+            return _bounded(FUNCTIONS[name][0](fargs[0]), bad)
+        if functions is not None and name not in functions:
+            raise bad(f"function {name!r} is neither built in nor a declared user function")
         return sp.Function(name)(*fargs)
     raise bad(f"unknown node {tag!r:.40}")
 
@@ -216,7 +240,9 @@ class _NamePrinter(sp.printing.str.StrPrinter):
         coeff, factors = expr.as_coeff_mul()
         factors = sorted(factors, key=self._key)
         body = " ".join(self._print(f) if not f.is_Add else f"({self._print(f)})" for f in factors)
-        return body if coeff == 1 else f"{self._print(coeff)} {body}"
+        if coeff == 1:
+            return body
+        return f"-{body}" if coeff == -1 else f"{self._print(coeff)} {body}"
 
     def _print_Pow(self, expr):
         base, ex = expr.args

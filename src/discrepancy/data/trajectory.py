@@ -110,13 +110,18 @@ def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
         u: inputs ``(m, r)`` (or ``(m,)`` for one input), or a list per trajectory.
         x_dot: measured derivatives ``(m, n)``, or a list per trajectory.
     """
-    xs = list(x) if isinstance(x, (list, tuple)) else [x]
+    several = isinstance(x, (list, tuple))
+    xs = list(x) if several else [x]
     if not xs:
         raise ShapeError("x must hold at least one trajectory; got an empty list")
     k = len(xs)
-    ts = _as_list("t", 1.0 if t is None else t, k, broadcast=np.ndim(t) == 0)
-    us = _as_list("u", u, k, broadcast=u is None)
-    xds = _as_list("x_dot", x_dot, k, broadcast=x_dot is None)
+    if several:
+        ts = _as_list("t", 1.0 if t is None else t, k,
+                      broadcast=not isinstance(t, (list, tuple)) and np.ndim(t) == 0)
+        us = _as_list("u", u, k, broadcast=u is None)
+        xds = _as_list("x_dot", x_dot, k, broadcast=x_dot is None)
+    else:
+        ts, us, xds = [1.0 if t is None else t], [u], [x_dot]
     out, n, r = [], None, None
     for i in range(k):
         tag = "" if k == 1 else f"[{i}]"

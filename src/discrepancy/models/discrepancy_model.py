@@ -224,8 +224,9 @@ class DiscrepancyModel:
     def to_sympy(self, part: str | None = None):
         """Equations as sympy expressions, one per state.
 
-        ``part="hybrid"`` gives ``f_m + g`` (needs a sympy prior or no prior),
-        ``"discrepancy"`` gives ``g``; the default is hybrid when possible.
+        ``part="hybrid"`` gives ``f_m + g`` and needs a sympy prior (or none);
+        ``"discrepancy"`` gives ``g`` alone. The default is the hybrid model when the
+        prior is symbolic or absent, and the discrepancy when it is a Python callable.
         """
         from .export import to_sympy
         return to_sympy(self, part)
@@ -236,7 +237,11 @@ class DiscrepancyModel:
         return to_latex(self, precision, part)
 
     def to_casadi(self, part: str | None = None):
-        """CasADi ``Function`` ``f(x, u) -> xdot`` (``f(x)`` without inputs), exact."""
+        """CasADi ``Function`` ``f(x, u) -> xdot`` (``f(x)`` without inputs), exact.
+
+        The default is the whole hybrid model, which needs a sympy prior: a callable
+        prior raises ExportError (ask for ``part="discrepancy"`` to get ``g`` alone).
+        """
         from .export import to_casadi
         return to_casadi(self, part)
 

@@ -8,9 +8,13 @@ from ..symbolic import feature_name, symbol
 from ..symbolic import to_casadi as expression_to_casadi
 
 
-def _part(model, part):
+def _part(model, part, *, default_hybrid: bool = False):
+    """Which equations to export. By default the hybrid model when the prior is symbolic
+    (or absent), else the discrepancy alone; ``default_hybrid`` makes the default the
+    hybrid model always, so a callable prior is refused rather than silently dropped."""
     if part is None:
-        part = "hybrid" if model.prior_.is_symbolic or model.prior is None else "discrepancy"
+        symbolic = model.prior_.is_symbolic or model.prior is None
+        part = "hybrid" if symbolic or default_hybrid else "discrepancy"
     if part not in ("hybrid", "discrepancy"):
         raise ParameterError(f"part must be 'hybrid' or 'discrepancy'; got {part!r}")
     if part == "hybrid" and model.prior is not None and not model.prior_.is_symbolic:
@@ -53,7 +57,7 @@ def to_casadi(model, part=None):
     """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms)."""
     import casadi as ca
 
-    part = _part(model, part)
+    part = _part(model, part, default_hybrid=True)
     x = ca.SX.sym("x", model.n_states_)
     u = ca.SX.sym("u", model.n_inputs_)
     variables = {n: x[i] for i, n in enumerate(model.state_names_)}

@@ -78,37 +78,55 @@ def read_model_file(path) -> dict:
         doc = json.loads(text)
     except json.JSONDecodeError as e:
         raise _fail(f"not valid JSON ({e.msg} at line {e.lineno})") from None
+    except (ValueError, RecursionError) as e:  # huge integer literals, absurd nesting
+        raise _fail(f"not a usable JSON document ({type(e).__name__})") from None
     if not isinstance(doc, dict) or set(doc) != KEYS:
         got = sorted(doc) if isinstance(doc, dict) else type(doc).__name__
         raise _fail(f"expected the keys {sorted(KEYS)}, got {got}")
-    if doc["format"] != FORMAT or doc["version"] != VERSION:
+    if doc["format"] != FORMAT or type(doc["version"]) is not int or doc["version"] != VERSION:
         raise _fail(f"format {doc['format']!r:.40} version {doc['version']!r:.20} is not "
                     f"{FORMAT!r} version {VERSION}")
     states, inputs = _names(doc, "state_names"), _names(doc, "input_names")
-    if not isinstance(doc["features"], list) or not doc["features"]:
-        raise _fail("features must be a non-empty list of expressions")
-    features = [from_data(f, where=f"features[{i}]") for i, f in enumerate(doc["features"])]
-    allowed = set(states) | set(inputs)
-    for i, e in enumerate(features):
-        if not {s.name for s in e.free_symbols} <= allowed:
-            raise _fail(f"features[{i}] uses variables outside {sorted(allowed)}")
-    coef = _coefficients(doc, len(states), len(features))
     functions = doc["user_functions"]
     if not isinstance(functions, list) or not all(isinstance(f, str) and IDENTIFIER.match(f)
                                                   for f in functions):
         raise _fail("user_functions must be a list of identifiers")
-    prior = doc["prior"]
-    if prior is not None:
-        if not isinstance(prior, dict) or prior.get("kind") not in ("sympy", "callable"):
-            raise _fail("prior must be null or an object with kind 'sympy' or 'callable'")
-        if prior["kind"] == "sympy":
-            exprs = prior.get("expressions")
-            if not isinstance(exprs, list) or len(exprs) != len(states):
-                raise _fail(f"prior expressions must be a list of {len(states)} expressions")
-            rebuilt = [from_data(e, where=f"prior[{i}]") for i, e in enumerate(exprs)]
-            prior = {"kind": "sympy", "expressions": rebuilt}
+    if not isinstance(doc["features"], list) or not doc["features"]:
+        raise _fail("features must be a non-empty list of expressions")
+    allowed = set(states) | set(inputs)
+    features = [_expression(f, f"features[{i}]", allowed, functions)
+                for i, f in enumerate(doc["features"])]
+    coef = _coefficients(doc, len(states), len(features))
     return {"state_names": states, "input_names": inputs, "features": features,
-            "coefficients": coef, "prior": prior, "user_functions": functions}
+            "coefficients": coef, "prior": _prior(doc["prior"], states, allowed),
+            "user_functions": functions}
+
+
+def _expression(data, where, allowed, functions):
+    expr = from_data(data, where=where, functions=functions)
+    if not {s.name for s in expr.free_symbols} <= allowed:
+        raise _fail(f"{where} uses variables outside {sorted(allowed)}")
+    return expr
+
+
+def _prior(prior, states, allowed):
+    if prior is None:
+        return None
+    if not isinstance(prior, dict) or prior.get("kind") not in ("sympy", "callable"):
+        raise _fail("prior must be null or an object with kind 'sympy' or 'callable'")
+    expected = {"kind", "expressions"} if prior["kind"] == "sympy" else {"kind", "name"}
+    if set(prior) != expected:
+        raise _fail(f"a {prior['kind']} prior must have exactly the keys {sorted(expected)}")
+    if prior["kind"] == "callable":
+        if not isinstance(prior["name"], str) or len(prior["name"]) > 200:
+            raise _fail("a callable prior's name must be a short string")
+        return prior
+    exprs = prior["expressions"]
+    if not isinstance(exprs, list) or len(exprs) != len(states):
+        raise _fail(f"prior expressions must be a list of {len(states)} expressions")
+    return {"kind": "sympy",
+            "expressions": [_expression(e, f"prior[{i}]", allowed, [])
+                            for i, e in enumerate(exprs)]}
 
 
 def load_model(path, prior=None, *, functions=None):
