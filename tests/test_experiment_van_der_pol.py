@@ -21,6 +21,9 @@ def test_reproduce_vdp_meets_the_issue_bar(tmp_path, case, truth):
             assert lib["identified_terms_seed0"]["x2"][term] == pytest.approx(value, rel=0.01)
         assert lib["validation_relative_trajectory_error_hybrid"] < 0.01
         assert lib["validation_relative_trajectory_error_prior"] > 0.3
+    for term, u in results["uncertainty_seed0_polynomial_degree_4"].items():
+        assert u["inclusion_probability"] == 1.0, term
+        assert u["std"] < 0.01 * abs(truth[term]), term
     study = results["noise_study_polynomial_degree_4"]
     assert study["noise 0.1 auto (BIC)"]["support_correct_seeds"] == 10
     report = (folder / "report.md").read_text()
