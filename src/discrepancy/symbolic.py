@@ -104,8 +104,12 @@ def to_data(expr: sp.Expr):
     """
     if expr.is_Symbol:
         return ["sym", expr.name]
+    if expr in CONSTANTS.values():
+        return ["const", str(expr)]
     if expr.is_Rational:
-        return ["num", int(expr.p), int(expr.q)]
+        if max(abs(int(expr.p)), int(expr.q)) <= MAX_INTEGER:
+            return ["num", int(expr.p), int(expr.q)]
+        return ["float", float(expr)]
     if expr.is_Float or expr.is_number and not expr.args:
         return ["float", float(expr)]
     if expr.is_Add:
@@ -122,7 +126,8 @@ def to_data(expr: sp.Expr):
     raise ExportError(f"cannot store expression {expr}: node type {name} is not supported")
 
 
-MAX_INTEGER = 10**15   # integers in stored rationals
+MAX_INTEGER = 10**30   # integers in stored rationals (larger ones are stored as floats)
+CONSTANTS = {"pi": sp.pi, "E": sp.E}
 MAX_EXPONENT = 64      # numeric exponents: keeps sympy's exact arithmetic small
 
 
@@ -161,6 +166,10 @@ def from_data(data, *, where: str = "expression", depth: int = 0,
             raise bad(f"rational must be two integers of at most {MAX_INTEGER} with q != 0, "
                       f"got {str(args)[:60]}")
         return sp.Rational(args[0], args[1])
+    if tag == "const":
+        if len(args) != 1 or args[0] not in CONSTANTS:
+            raise bad(f"constant must be one of {sorted(CONSTANTS)}, got {str(args)[:40]}")
+        return CONSTANTS[args[0]]
     if tag == "float":
         if len(args) != 1 or not isinstance(args[0], (int, float)) or not np.isfinite(args[0]):
             raise bad(f"float must be one finite number, got {args!r:.60}")

@@ -60,7 +60,7 @@ def load(path, *, states=None, inputs=None, time: str | None = "t") -> LoadedDat
     if kind == "csv":
         return _from_columns(path, *_read_csv(path), states, inputs, time)
     variables = _read_variables(path, kind)
-    return _from_variables(path, variables, states, inputs, time)
+    return _from_variables(path, variables, states, inputs, time, matlab=kind == "mat")
 
 
 def _read_csv(path: Path):
@@ -110,7 +110,19 @@ def _read_variables(path: Path, kind: str) -> dict[str, np.ndarray]:
     return out
 
 
-def _from_variables(path, variables, states, inputs, time):
+def _stored_as_rows(shape, n_times, matlab: bool) -> bool:
+    """Whether a 2-D variable holds samples in columns: decided by the length of the time
+    vector when there is one, else (MATLAB files only) by being wider than tall."""
+    if n_times is not None:
+        return shape[0] != n_times and shape[1] == n_times
+    return matlab and shape[0] < shape[1]
+
+
+def _from_variables(path, variables, states, inputs, time, *, matlab: bool):
+    n_times = None
+    if time is not None and time in variables:
+        n_times = np.asarray(variables[time]).size
+
     def get(name):
         if name not in variables:
             raise UnknownNameError(f"{path.name}: variable {name!r} not found; the file has "
@@ -121,8 +133,8 @@ def _from_variables(path, variables, states, inputs, time):
         if isinstance(spec, str):
             a = get(spec)
             a = a[:, None] if a.ndim == 1 else a
-            if a.ndim == 2 and a.shape[0] < a.shape[1] and a.shape[0] <= 16:
-                a = a.T  # MATLAB stores variables as rows
+            if a.ndim == 2 and _stored_as_rows(a.shape, n_times, matlab):
+                a = a.T
             return a, [f"{default_stem}{i + 1}" for i in range(a.shape[1])]
         return np.column_stack([get(n).ravel() for n in spec]), list(spec)
 
