@@ -57,7 +57,7 @@ def test_plans_converge_and_the_balancing_plan_is_far_more_sensitive(results):
     paper = sens["hybrid_plan_paper_cost"]["angle_sensitivity_rad_per_unit_coefficient"]
     low = sens["hybrid_plan_min_effort"]["angle_sensitivity_rad_per_unit_coefficient"]
     assert paper > 100 * low
-    assert res["plans"]["hybrid_plan_paper_cost"]["final_time_within_0.1_rad_of_upright_s"] > 1.0
+    assert res["plans"]["hybrid_plan_paper_cost"]["final_time_within_0.2_rad_of_upright_s"] > 1.0
 
 
 @pytest.mark.slow

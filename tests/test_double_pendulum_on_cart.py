@@ -136,3 +136,15 @@ def test_bad_input_is_rejected():
     with pytest.raises(ParameterError, match="unknown"):
         P.scaled({"mass": 1.1})
     assert P.scaled({"m1": 1.02}).m1 == pytest.approx(0.2704 * 1.02)
+
+
+def test_parametric_equations_match_a_perturbed_system():
+    params = P.scaled({"m1": 1.02, "a2": 0.99, "I1": 1.015, "k2": 0.98})
+    states, inputs, parameters, rhs = DoublePendulumOnCart.parametric_equations()
+    names = [s.name for s in [*states, *inputs, *parameters]]
+    rng = np.random.default_rng(5)
+    x, u = random_states(rng, 40)
+    z = np.hstack([x, u, np.tile([getattr(params, p.name) for p in parameters], (40, 1))])
+    values = np.column_stack([compile_numpy(e, names)(z) for e in rhs])
+    np.testing.assert_allclose(values[:, 3:5], textbook_accelerations(x, u, params), rtol=1e-10,
+                               atol=1e-10)

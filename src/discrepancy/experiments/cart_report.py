@@ -32,7 +32,7 @@ def write_report(rep, results: dict) -> None:
     rep.text("## Plans")
     keys = ["ipopt_status", "ipopt_iterations", "solve_time_s", "objective",
             "max_interval_integration_error", "own_model_replay_final_state_error",
-            "open_loop_amplification_norm", "final_time_within_0.1_rad_of_upright_s"]
+            "open_loop_amplification_norm", "final_time_within_0.2_rad_of_upright_s"]
     rep.table(["plan", *keys], [[k, *[_fmt(v[c]) for c in keys]] for k, v in plans.items()])
     rep.text("*max_interval_integration_error*: largest difference over one 20 ms interval "
              "between the planner's RK4 and a tight ODE solve of the same model and input. "
@@ -42,15 +42,28 @@ def write_report(rep, results: dict) -> None:
     rep.text("## Runs on the nominal true system")
     cols = ["success", "phi1", "phi2", "dphi1", "dphi2", "max_cart_travel_m", "max_abs_input"]
     rep.table(["strategy", *cols], [[k, *[_fmt(v[c]) for c in cols]] for k, v in runs.items()])
+    fl, st = runs["flawed plan + TVLQR"], runs["flawed plan + stiff TVLQR"]
+    rep.text(
+        "**Flawed plan with tracking.** TVLQR on the flawed model's linearisation with the "
+        f"paper's Q, R ends {max(fl['phi1'], fl['phi2']):.3f} rad from upright and drives the "
+        f"cart {fl['max_cart_travel_m']:.2f} m from the centre, off the ±{s['cart_rail_m']} m "
+        "rail: the plan asks for motion the true system cannot make (its cart accelerates 5 % "
+        "harder and its φ1 lacks the spurious sin φ1 drift), so the tracker fights a "
+        "persistent error. A much stiffer tracker (Q = diag(100, 100, 10, 1, 1, 1), R = 0.1, "
+        "last row) does bring the links up "
+        f"({max(st['phi1'], st['phi2']):.3f} rad) but saturates the input at "
+        f"{st['max_abs_input']:.0f} m/s² and needs {st['max_cart_travel_m']:.2f} m of travel, "
+        "about twice the rail: it meets the final-angle criterion only by leaving the rail, "
+        "which a real cart cannot do.")
     sp, se = sens["hybrid_plan_paper_cost"], sens["hybrid_plan_min_effort"]
     pc, me = plans["hybrid_plan_paper_cost"], plans["hybrid_plan_min_effort"]
     rep.text(
         "## Why the paper-cost hybrid plan fails open loop\n\n"
         "The paper's cost Q = diag(10, 10, 20, 1, 1, 0.1) penalises every moment away from "
         "upright, so the optimal plan swings up early and then balances both links on the "
-        "unstable upright equilibrium for the rest of the horizon (within 0.1 rad of upright "
-        f"for the last {pc['final_time_within_0.1_rad_of_upright_s']:.2f} s, against "
-        f"{me['final_time_within_0.1_rad_of_upright_s']:.2f} s for the minimum-effort plan). "
+        "unstable upright equilibrium for the rest of the horizon (within 0.2 rad of upright "
+        f"for the last {pc['final_time_within_0.2_rad_of_upright_s']:.2f} s, against "
+        f"{me['final_time_within_0.2_rad_of_upright_s']:.2f} s for the minimum-effort plan). "
         "Open loop nothing corrects "
         "drift there, and errors grow exponentially: ‖Φ(T, 0)‖ = "
         f"{pc['open_loop_amplification_norm']:.2e} for this plan against "

@@ -104,8 +104,9 @@ def robustness_figure(final_errors: dict, success: dict, *, angle_tol=0.05):
     return fig
 
 
-def swingup_gif(path, runs: dict, points, *, fps=25, rail=0.5, dpi=80):
-    """Animated GIF of several runs side by side; ``runs = {label: (t, x)}`` sharing ``t``."""
+def swingup_gif(path, runs: dict, points, *, fps=20, rail=0.5, dpi=72):
+    """Animated GIF of several runs side by side; ``runs = {label: (t, x)}`` sharing ``t``.
+    Dotted red lines: the rail's ends; the panel is ±(rail + 0.15) m wide or wider."""
     labels = list(runs)
     t = runs[labels[0]][0]
     frames = np.unique(np.searchsorted(t, np.arange(0.0, t[-1] + 1e-9, 1.0 / fps)).clip(0,
@@ -118,16 +119,26 @@ def swingup_gif(path, runs: dict, points, *, fps=25, rail=0.5, dpi=80):
     axes = axes.ravel()[:len(labels)]
     pts = {k: points(runs[k][1]) for k in labels}
     width = max(rail + 0.15, max(np.abs(p[..., 0]).max() for p in pts.values()) + 0.1)
+    artists = []
+    for ax, k in zip(axes, labels, strict=True):
+        ax.set_xlim(-width, width)
+        _frame(ax, rail, k)
+        ax.set_xticks([])  # tick labels would be re-laid out on every frame (slow)
+        ax.set_yticks([])
+        cart = ax.add_patch(Rectangle((0, -CART_H / 2), CART_W, CART_H, fc="0.8", ec="0.3"))
+        (links,) = ax.plot([], [], "-o", color="tab:blue", lw=2, ms=3)
+        clock = ax.text(0.03, 0.88, "", transform=ax.transAxes, fontsize=8,
+                        bbox={"fc": "w", "ec": "none", "alpha": 0.8})
+        artists.append((k, cart, links, clock))
+    fig.tight_layout()
 
     def draw(i):
-        for ax, k in zip(axes, labels, strict=True):
-            ax.clear()
-            ax.set_xlim(-width, width)
-            _frame(ax, rail, k)
-            _draw(ax, pts[k][frames[i]], 1.0, "tab:blue")
-            ax.text(0.03, 0.88, f"t = {t[frames[i]]:.2f} s", transform=ax.transAxes, fontsize=8,
-                    bbox={"fc": "w", "ec": "none", "alpha": 0.8})
-        fig.tight_layout()
+        j = frames[i]
+        for k, cart, links, clock in artists:
+            p = pts[k][j]
+            cart.set_x(p[0, 0] - CART_W / 2)
+            links.set_data(p[:, 0], p[:, 1])
+            clock.set_text(f"t = {t[j]:.2f} s")
         return []
 
     anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)

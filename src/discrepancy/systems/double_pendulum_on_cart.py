@@ -126,6 +126,17 @@ class DoublePendulumOnCart(System):
         values = self._values()
         return mass.subs(values), rest.subs(values), energy.subs(values)
 
+    @staticmethod
+    def parametric_equations():
+        """``(states, inputs, parameters, rhs)`` with the parameters left as sympy symbols
+        (named like the fields of :class:`CartPendulumParameters`); lets one compiled function
+        serve many parameter sets (e.g. a robustness study)."""
+        par, mass, rest, _ = _derived()
+        states = [symbol(n) for n in STATE_NAMES]
+        inputs = [symbol(n) for n in INPUT_NAMES]
+        dd1, dd2 = _cramer(mass[0, 0], mass[0, 1], mass[1, 1], rest[0], rest[1])
+        return states, inputs, list(par.values()), [*states[3:], dd1, dd2, inputs[0]]
+
     def equations(self):
         """``(states, inputs, rhs)``: sympy symbols named as ``state_names`` / ``input_names``
         and the 6 true right-hand side expressions (accelerations by Cramer's rule)."""
