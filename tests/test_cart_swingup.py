@@ -69,3 +69,12 @@ def test_robustness_study_quick(results):
     assert np.all(np.abs(factors - 1) <= 0.02 + 1e-12)
     assert study["success_counts"]["hybrid plan (paper cost) + TVLQR"] == n
     assert study["success_counts"]["flawed plan, open loop"] == 0
+
+
+@pytest.mark.slow
+def test_differentiating_across_input_jumps_is_worse(results):
+    ident = results[1]["identification"]
+    other = ident["other_differentiation_methods"]
+    assert ident["sin_phi1_relative_error"] < 1e-6 and ident["u_relative_error"] < 1e-6
+    whole = other["whole_run_finite_difference"]
+    assert whole["u_relative_error"] > 100 * ident["u_relative_error"]
