@@ -72,6 +72,12 @@ def time_series_figure(runs: dict, *, plans: dict | None = None):
     for ax, label in zip(axes, labels, strict=True):
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
+    for ax in axes[:2]:  # a tumbling run would squash the others; show -2..5.5 rad only
+        lo, hi = ax.get_ylim()
+        if lo < -2 or hi > 5.5:
+            ax.set_ylim(max(lo, -2.0), min(hi, 5.5))
+            ax.text(0.99, 0.03, "axis clipped to [-2, 5.5] rad", transform=ax.transAxes,
+                    ha="right", fontsize=7, color="0.4")
     axes[0].legend(fontsize=7, loc="best")
     axes[-1].set_xlabel("t (s)")
     fig.tight_layout()
