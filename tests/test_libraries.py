@@ -301,3 +301,35 @@ def test_tensor_product_property(left, right, seed):
     products = {ea * eb for ea in a.feature_expressions_ for eb in b.feature_expressions_}
     assert set(prod.feature_expressions_) == products
     assert len(prod.feature_expressions_) == len(products)
+
+
+def _random_expressions():
+    atoms = st.one_of(st.sampled_from([x1, x2, u]), st.integers(-4, 4).map(sp.Integer),
+                      st.fractions(min_value=-2, max_value=2, max_denominator=5).map(sp.Rational))
+    unary = st.sampled_from([sp.sin, sp.cos, sp.exp, sp.tanh, sp.Abs, sp.atan, sp.cosh])
+
+    def combine(children):
+        return st.one_of(
+            st.lists(children, min_size=2, max_size=3).map(lambda a: sp.Add(*a)),
+            st.lists(children, min_size=2, max_size=3).map(lambda a: sp.Mul(*a)),
+            st.tuples(children, st.integers(-2, 3)).map(lambda a: sp.Pow(a[0], a[1])),
+            st.tuples(children, st.sampled_from([sp.Rational(1, 2), sp.Rational(3, 2)])).map(
+                lambda a: sp.Pow(sp.Abs(a[0]) + 1, a[1])),
+            st.tuples(unary, children).map(lambda a: a[0](a[1])))
+
+    return st.recursive(atoms, combine, max_leaves=6)
+
+
+@given(exprs=st.lists(_random_expressions(), min_size=1, max_size=4), seed=st.integers(0, 2**16))
+def test_custom_expressions_property(exprs, seed):
+    """Every sympy expression a user can write evaluates as sympy.lambdify does."""
+    exprs = [e for e in exprs if not e.has(sp.zoo, sp.nan, sp.oo, -sp.oo)]
+    if not exprs:
+        return
+    lib = dc.CustomLibrary(expressions=exprs).fit(NAMES)
+    Z = np.random.default_rng(seed).uniform(-2, 2, size=(12, 3))
+    with np.errstate(all="ignore"):
+        theta = lib.transform(Z)
+        expected = sympy_columns(lib, Z)
+    assert theta.shape == expected.shape
+    np.testing.assert_allclose(theta, expected, rtol=1e-9, atol=1e-12, equal_nan=True)

@@ -97,6 +97,28 @@ def test_plain_sindy_with_given_derivatives_is_exact(lorenz_data):
     assert_terms(model, LORENZ_TERMS, rtol=1e-9)
 
 
+@pytest.mark.parametrize("several", [False, True], ids=["one", "list"])
+def test_plain_sindy_pipeline_equals_pysindy(lorenz_data, helpers, several):
+    """Same data, finite differences, library and STLSQ: same coefficients as pysindy.SINDy."""
+    import warnings
+
+    import pysindy as ps
+
+    x = lorenz_data.x + 0.05 * np.random.default_rng(0).normal(size=lorenz_data.x.shape)
+    if several:
+        x = [x, helpers.integrate(helpers.lorenz_rhs, [1.0, 1.0, 1.0], lorenz_data.t[:1500])]
+    ours = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(degree=2),
+                               optimizer=dc.STLSQ(threshold=0.5),
+                               differentiation_method=dc.FiniteDifference()).fit(x, t=0.002)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        peer = ps.SINDy(feature_library=ps.PolynomialLibrary(degree=2),
+                        optimizer=ps.STLSQ(threshold=0.5),
+                        differentiation_method=ps.FiniteDifference()).fit(x, t=0.002)
+    np.testing.assert_allclose(ours.coefficients(), peer.coefficients(), rtol=0, atol=1e-8)
+    assert np.count_nonzero(ours.coefficients()) == 7
+
+
 def _vdp_pieces(helpers):
     """Two Van der Pol trajectories that do not meet: joining them creates a jump."""
     t = np.arange(801) * 0.01

@@ -10,9 +10,11 @@ import sys
 import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import discrepancy as dc
-from discrepancy.errors import ModelFileError, ParameterError
+from discrepancy.errors import DiscrepancyError, ModelFileError, ParameterError
 from discrepancy.symbolic import symbol
 
 x1, x2, u = symbol("x1"), symbol("x2"), symbol("u")
@@ -383,3 +385,75 @@ def test_huge_power_is_refused_quickly(saved, tmp_path):
     except subprocess.TimeoutExpired:
         pytest.fail("loading a model file with a huge integer power did not finish in 15 s")
     assert done.returncode == 0, done.stderr.decode()[-500:]
+
+
+# ------------------------------------------------------------------ properties
+
+SYMBOLS = [x1, x2, u]
+atoms = st.one_of(st.sampled_from(SYMBOLS), st.integers(-5, 5).map(sp.Integer),
+                  st.fractions(min_value=-3, max_value=3, max_denominator=7).map(sp.Rational),
+                  st.floats(-10, 10, allow_nan=False).map(sp.Float))
+
+
+def _combine(children):
+    unary = st.sampled_from([sp.sin, sp.cos, sp.exp, sp.tanh, sp.Abs, sp.atan])
+    return st.one_of(
+        st.lists(children, min_size=2, max_size=3).map(lambda a: sp.Add(*a)),
+        st.lists(children, min_size=2, max_size=3).map(lambda a: sp.Mul(*a)),
+        st.tuples(children, st.integers(-3, 4)).map(lambda a: sp.Pow(a[0], a[1])),
+        st.tuples(unary, children).map(lambda a: a[0](a[1])))
+
+
+expressions = st.recursive(atoms, _combine, max_leaves=8)
+
+
+@given(expr=expressions)
+def test_expression_data_round_trip(expr):
+    from discrepancy.symbolic import from_data, to_data
+
+    if expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
+        return
+    data = to_data(expr)
+    assert json.loads(json.dumps(data)) == data   # plain JSON
+    assert from_data(json.loads(json.dumps(data))) == expr
+
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=8),
+    lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=6), c, max_size=3),
+    max_leaves=8)
+
+
+def all_paths(node, path=()):
+    yield path
+    if isinstance(node, list):
+        for i, v in enumerate(node):
+            yield from all_paths(v, (*path, i))
+    elif isinstance(node, dict):
+        for k, v in node.items():
+            yield from all_paths(v, (*path, k))
+
+
+@settings(max_examples=150)
+@given(data=st.data())
+def test_random_edits_give_a_model_or_a_model_file_error(saved, tmp_path_factory, data):
+    kind = data.draw(st.sampled_from(["sympy", "callable"]))
+    doc = saved[kind]
+    path = data.draw(st.sampled_from([p for p in all_paths(doc) if p]))
+    value = data.draw(json_values)
+    tampered = replaced(doc, path, value)
+    target = tmp_path_factory.mktemp("fuzz") / "t.json"
+    try:
+        model = load_doc(tampered, target, kind)
+    except ModelFileError:
+        return
+    except ParameterError as e:  # only legitimate when the file now asks for code
+        assert "prior" in str(e) or "functions" in str(e), e
+        return
+    # whatever loaded must evaluate to finite numbers or raise a package error
+    x = states(len(model.state_names_))
+    args = (x,) if not model.input_names_ else (x, states(len(model.input_names_)))
+    try:
+        model.predict(*args)
+    except (DiscrepancyError, FloatingPointError):
+        pass
