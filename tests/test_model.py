@@ -381,3 +381,73 @@ def test_estimator_contract(vdp_data):
     assert model.fit(vdp_data.x, t=vdp_data.dt) is model
     # the user's library and optimizer objects are not fitted in place
     assert not hasattr(lib, "feature_expressions_") and not hasattr(opt, "coef_")
+
+
+def test_sampled_input_is_interpolated_linearly(forced_model, forced_data, helpers):
+    t, x, uu = forced_data
+    t, uu = t[:301:10], uu[:301:10]   # coarse samples, so the hold rule matters
+    law = lambda tau: np.array([np.interp(tau, t, uu[:, 0])])  # noqa: E731
+    reference = helpers.integrate(lambda s, v: forced_rhs(s, v)[0], x[0], t, u=law)
+    np.testing.assert_allclose(forced_model.simulate(x[0], t, u=uu), reference, atol=1e-6)
+
+
+def test_sampled_input_with_zero_order_hold(forced_model, forced_data, helpers):
+    t, x, uu = forced_data
+    t, uu = t[:301:10], uu[:301:10]
+    # reference: one solve per interval with the input held at its left sample
+    state, reference = x[0], [x[0]]
+    for k in range(len(t) - 1):
+        piece = helpers.integrate(lambda s, v, k=k: forced_rhs(s, uu[k])[0], state,
+                                  np.array([t[k], t[k + 1]]))
+        state = piece[-1]
+        reference.append(state)
+    sim = forced_model.simulate(x[0], t, u=uu, u_hold="zoh")
+    np.testing.assert_allclose(sim, np.array(reference), atol=1e-6)
+    # and the hold rule makes a visible difference
+    assert np.max(np.abs(sim - forced_model.simulate(x[0], t, u=uu))) > 1e-3
+
+
+def test_savitzky_golay_smoothed_states_feed_the_library(vdp_data):
+    from scipy.signal import savgol_filter
+
+    from discrepancy.data import as_trajectories
+
+    x = noisy(vdp_data, 4)
+    model = dc.DiscrepancyModel(prior=prior_parameter, feature_library=dc.PolynomialLibrary(3),
+                                optimizer=dc.STLSQ(threshold=0.05),
+                                differentiation_method=dc.SavitzkyGolay(window_length=21))
+    model.fit(x, t=vdp_data.dt)
+    (trajectory,) = as_trajectories(x, vdp_data.dt)
+    z, y = model.residual(trajectory)
+    smooth = savgol_filter(x, 21, 3, axis=0, mode="interp")
+    slope = savgol_filter(x, 21, 3, deriv=1, delta=vdp_data.dt, axis=0, mode="interp")
+    np.testing.assert_allclose(z, smooth, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(y, slope - prior_parameter(smooth), rtol=1e-10, atol=1e-10)
+
+
+def test_prior_taking_only_x(vdp_data):
+    kw = dict(feature_library=dc.PolynomialLibrary(degree=3), optimizer=dc.STLSQ(threshold=0.05))
+    a = dc.DiscrepancyModel(prior=lambda x: prior_parameter(x), **kw).fit(
+        vdp_data.x, t=vdp_data.dt, x_dot=vdp_data.x_dot)
+    assert_terms(a, {(1, "x2"): 0.4, (1, "x1^2 x2"): -0.4}, rtol=1e-9)
+
+
+def test_sympy_prior_with_inputs_exports_the_whole_hybrid(forced_data):
+    import casadi as ca
+
+    t, x, uu = forced_data
+    model = dc.DiscrepancyModel(prior=[x2, -x1 - sp.Rational(1, 5) * x2],
+                                feature_library=control_library(),
+                                optimizer=dc.STLSQ(threshold=0.05))
+    model.fit(x, t=t, u=uu, x_dot=forced_rhs(x, uu))
+    hybrid = model.to_sympy()
+    expected = -x1 - sp.Rational(1, 5) * x2 + GAIN * sp.sin(x1) * u
+    residue = sp.expand(hybrid[1] - expected)
+    assert all(abs(float(term.as_coeff_Mul()[0])) < 1e-9
+               for term in sp.Add.make_args(residue)) or residue == 0
+    f = model.to_casadi()
+    rng = np.random.default_rng(1)
+    xs, us = rng.uniform(-2, 2, size=(20, 2)), rng.uniform(-1, 1, size=(20, 1))
+    got = np.vstack([np.asarray(f(a, b)).ravel() for a, b in zip(xs, us, strict=True)])
+    np.testing.assert_allclose(got, forced_rhs(xs, us), atol=1e-9)
+    assert isinstance(f, ca.Function)
