@@ -372,3 +372,15 @@ def test_sympy_expression_with_unsupported_function():
     lib = dc.CustomLibrary(expressions=[sp.gamma(symbol("x1"))])
     with pytest.raises(errors.ExportError, match="gamma"):
         model(feature_library=lib).fit(x, t=0.01)
+
+
+@pytest.mark.xfail(strict=True, reason="models/simulation.integrate: solve_ivp with one time "
+                   "returns sol.y as a list, and 'sol.y.shape' raises AttributeError")
+@pytest.mark.parametrize("t", [[0.0], 3.0], ids=["one_time", "scalar"])
+def test_simulate_with_fewer_than_two_times(fitted, t):
+    try:
+        out = fitted.simulate([0.1, 0.2], t, u=lambda tau: [0.0])
+    except (ShapeError, DataError) as e:
+        assert "t" in str(e)
+    else:  # the only other sensible answer: the initial state itself
+        np.testing.assert_array_equal(out, [[0.1, 0.2]])
