@@ -217,3 +217,19 @@ def test_kalman_refuses_very_long_trajectories():
 def test_shape_mismatch_between_x_and_t():
     with pytest.raises(ShapeError, match="t"):
         dc.FiniteDifference()(np.zeros((10, 2)), np.arange(9.0))
+
+
+@pytest.mark.parametrize("method", [dc.FiniteDifference(),
+                                    dc.SavitzkyGolay(window_length=11, polyorder=3),
+                                    dc.SavitzkyGolay(window_length=21, polyorder=2)],
+                         ids=["finite_difference", "sg11", "sg21"])
+def test_halo_lets_chunks_reproduce_the_whole_derivative(method, rng):
+    """A chunk padded by ``halo`` samples on each side gives the global answer inside it."""
+    t = uniform(0.01, end=4.0)
+    x = signals(t)[0] + 0.01 * rng.normal(size=(len(t), 3))
+    smooth, whole = method(x, t)
+    h = method.halo
+    for a, b in [(h, 60), (100, 137), (250, len(t) - h)]:
+        s, d = method(x[a - h:b + h], t[a - h:b + h])
+        np.testing.assert_allclose(d[h:h + b - a], whole[a:b], rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(s[h:h + b - a], smooth[a:b], rtol=1e-10, atol=1e-12)
