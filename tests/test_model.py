@@ -451,3 +451,28 @@ def test_sympy_prior_with_inputs_exports_the_whole_hybrid(forced_data):
     got = np.vstack([np.asarray(f(a, b)).ravel() for a, b in zip(xs, us, strict=True)])
     np.testing.assert_allclose(got, forced_rhs(xs, us), atol=1e-9)
     assert isinstance(f, ca.Function)
+
+
+_ARMED = {"on": False}
+
+
+def _tripwire(v):
+    if _ARMED["on"]:
+        raise AssertionError("an inactive term was evaluated")
+    return np.tanh(v)
+
+
+def test_predict_and_simulate_evaluate_only_active_terms(vdp_data, vdp_validation):
+    lib = dc.PolynomialLibrary(degree=3) + dc.CustomLibrary(functions={"trip": _tripwire})
+    model = dc.DiscrepancyModel(prior=prior_parameter, feature_library=lib,
+                                optimizer=dc.STLSQ(threshold=0.05))
+    model.fit(vdp_data.x, t=vdp_data.dt, x_dot=vdp_data.x_dot)
+    assert_terms(model, {(1, "x2"): 0.4, (1, "x1^2 x2"): -0.4}, rtol=1e-9)
+    _ARMED["on"] = True
+    try:
+        model.predict(vdp_validation.x)
+        model.discrepancy(vdp_validation.x)
+        sim = model.simulate(vdp_validation.x[0], vdp_validation.t[:500])
+    finally:
+        _ARMED["on"] = False
+    np.testing.assert_allclose(sim, vdp_validation.x[:500], atol=1e-6)
