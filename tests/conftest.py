@@ -14,7 +14,7 @@ import pytest
 from hypothesis import HealthCheck, settings
 from scipy.integrate import solve_ivp
 
-settings.register_profile("discrepancy", deadline=None, max_examples=40,
+settings.register_profile("discrepancy", deadline=None,
                           suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("discrepancy")
 
