@@ -49,8 +49,17 @@ class PolynomialLibrary(BaseLibrary):
         transposed (Fortran order, same values): for m = 4096 rows, degree 5 in 3
         variables this measured 0.11 ms against 0.3-1.2 ms for strided column writes.
         """
+        return self._fill(Zs, np.empty((len(self._monomials), Zs.shape[0]))).T
+
+    def _evaluate_into(self, Zs, out):
+        if not out.T.flags.c_contiguous:
+            return super()._evaluate_into(Zs, out)
+        self._fill(Zs, out.T)
+        return out
+
+    def _fill(self, Zs, out):
+        """Write the monomials of ``Zs`` ``(m, k)`` into the rows of ``out`` ``(p, m)``."""
         zt = np.ascontiguousarray(Zs.T)
-        out = np.empty((len(self._monomials), Zs.shape[0]))
         row = {}
         for j, c in enumerate(self._monomials):
             if not c:
@@ -60,4 +69,4 @@ class PolynomialLibrary(BaseLibrary):
             else:
                 np.multiply(out[row[c[:-1]]], zt[c[-1]], out=out[j])
             row[c] = j
-        return out.T
+        return out
