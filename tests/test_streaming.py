@@ -172,3 +172,31 @@ def test_times_must_keep_increasing_across_chunks():
 def test_u_and_x_dot_belong_in_the_chunks(lorenz_data):
     with pytest.raises(ParameterError, match="inside the chunks"):
         model().fit(chunks(lorenz_data), t=DT, x_dot=lorenz(lorenz_data))
+
+
+def test_transform_into_a_buffer_equals_transform():
+    rng = np.random.default_rng(2)
+    z = rng.standard_normal((500, 2))
+    poly = dc.PolynomialLibrary(degree=4).fit(["a", "b"])
+    both = (dc.PolynomialLibrary(degree=2) + dc.FourierLibrary(n_frequencies=2)).fit(["a", "b"])
+    for lib in (poly, both):
+        buffer = np.empty((lib.n_features_, 500)).T  # Fortran order, as the accumulator uses
+        assert np.array_equal(lib.transform(z, out=buffer), lib.transform(z))
+        c_order = np.empty((500, lib.n_features_))
+        assert np.array_equal(lib.transform(z, out=c_order), lib.transform(z))
+    with pytest.raises(ShapeError, match="out must be float64 of shape"):
+        poly.transform(z, out=np.empty((500, 3)))
+
+
+def test_in_memory_fit_with_a_composite_library_matches_plain_least_squares():
+    rng = np.random.default_rng(4)
+    x = rng.uniform(-2, 2, (9000, 2))
+    y = np.c_[0.7 * np.sin(x[:, 0]) - 0.3 * x[:, 1] ** 2, 1.5 * np.cos(2 * x[:, 1])]
+    lib = dc.PolynomialLibrary(degree=2) + dc.FourierLibrary(n_frequencies=2)
+    m = dc.DiscrepancyModel(feature_library=lib, optimizer=dc.STLSQ(threshold=0.0)).fit(
+        x, x_dot=y)
+    theta = m.feature_library_.transform(x)
+    lstsq = np.linalg.lstsq(theta, y, rcond=None)[0].T
+    np.testing.assert_allclose(m.coefficients(), lstsq, atol=1e-8)
+    names = m.get_feature_names()
+    assert abs(m.coefficients()[0, names.index("sin(x1)")] - 0.7) < 1e-8
