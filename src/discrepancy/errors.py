@@ -23,8 +23,8 @@ class ParameterError(DiscrepancyError, ValueError):
     """A constructor or method argument is out of its valid range."""
 
 
-class UnknownNameError(DiscrepancyError, ValueError):
-    """A name (method, variable, dataset) is not one of the valid ones."""
+class UnknownNameError(ParameterError):
+    """A name (method, variable, dataset) is not one of the valid ones (a ParameterError)."""
 
 
 class NotFittedError(DiscrepancyError, AttributeError):

@@ -39,6 +39,25 @@ def symbol(name: str) -> sp.Symbol:
     return sp.Symbol(name, real=True)
 
 
+def adopt(expr, names: Sequence[str], *, label: str) -> sp.Expr:
+    """``expr`` with its symbols replaced by the package's real symbols of the same names.
+
+    Numbers are accepted as constants. Raises ParameterError for a non-sympy object and
+    UnknownNameError for a symbol that is not one of ``names``; ``label`` names the argument.
+    """
+    from .errors import ParameterError, UnknownNameError
+
+    if isinstance(expr, (int, float)) and not isinstance(expr, bool):
+        expr = sp.Float(expr) if isinstance(expr, float) else sp.Integer(expr)
+    if not isinstance(expr, sp.Basic):
+        raise ParameterError(f"{label} must be a sympy expression; got {type(expr).__name__}")
+    unknown = sorted(s.name for s in expr.free_symbols if s.name not in names)
+    if unknown:
+        raise UnknownNameError(f"{label} = {expr} uses {unknown}, which are not among the "
+                               f"variables {list(names)}")
+    return expr.xreplace({s: symbol(s.name) for s in expr.free_symbols})
+
+
 def _number(expr) -> float:
     return float(expr)
 

@@ -6,8 +6,8 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from ..errors import ParameterError, UnknownNameError
-from ..symbolic import IDENTIFIER, compile_numpy, symbol
+from ..errors import ParameterError
+from ..symbolic import IDENTIFIER, adopt, compile_numpy
 from .base import BaseLibrary
 
 
@@ -46,16 +46,8 @@ class CustomLibrary(BaseLibrary):
         return [sp.Function(n)(s) for n in self.functions for s in symbols]
 
     def _from_expressions(self):
-        exprs = []
-        for e in self.expressions:
-            if not isinstance(e, sp.Basic):
-                raise ParameterError(f"expressions must be sympy expressions; got "
-                                     f"{type(e).__name__} ({e!r:.40})")
-            unknown = sorted(s.name for s in e.free_symbols if s.name not in self.names_all)
-            if unknown:
-                raise UnknownNameError(f"expression {e} uses {unknown}, which are not variables "
-                                       f"{self.names_all}")
-            exprs.append(e.xreplace({s: symbol(s.name) for s in e.free_symbols}))
+        exprs = [adopt(e, self.names_all, label=f"expressions[{i}]")
+                 for i, e in enumerate(self.expressions)]
         self._compiled = [compile_numpy(e, self.names_all) for e in exprs]
         return exprs
 

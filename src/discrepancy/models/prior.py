@@ -8,7 +8,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ParameterError, PriorError
-from ..symbolic import compile_numpy, symbol
+from ..symbolic import adopt, compile_numpy
 
 
 class Prior:
@@ -42,18 +42,7 @@ class Prior:
         if len(exprs) != self.n:
             raise ParameterError(f"prior must have one expression per state ({self.n}); "
                                  f"got {len(exprs)}")
-        out = []
-        for i, e in enumerate(exprs):
-            e = sp.sympify(e) if isinstance(e, (int, float)) else e
-            if not isinstance(e, sp.Basic):
-                raise ParameterError(f"prior[{i}] must be a sympy expression; got "
-                                     f"{type(e).__name__}")
-            unknown = sorted(s.name for s in e.free_symbols if s.name not in self.names)
-            if unknown:
-                raise ParameterError(f"prior[{i}] = {e} uses {unknown}, not among the "
-                                     f"variables {self.names}")
-            out.append(e.xreplace({s: symbol(s.name) for s in e.free_symbols}))
-        return out
+        return [adopt(e, self.names, label=f"prior[{i}]") for i, e in enumerate(exprs)]
 
     @property
     def is_symbolic(self) -> bool:

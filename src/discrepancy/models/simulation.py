@@ -10,6 +10,12 @@ from ..data.trajectory import as_2d, as_times
 from ..errors import ConvergenceError, ParameterError, ShapeError
 
 
+class _Diverged(Exception):
+    def __init__(self, time, state):
+        super().__init__(time)
+        self.time, self.state = float(time), np.array2string(np.asarray(state), precision=4)
+
+
 def input_law(u, t: np.ndarray, n_inputs: int, *, hold: str = "linear") -> Callable | None:
     """``u(τ) -> (r,)`` from an array sampled at ``t`` or a callable (checked once).
 
@@ -53,15 +59,20 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
     times = as_times("t", t, np.size(t))
     law = input_law(u, times, n_inputs, hold=u_hold)
 
-    if law is None:
-        def f(tau, x):
-            return rhs(x[None, :], None)[0]
-    else:
-        def f(tau, x):
-            return rhs(x[None, :], law(tau)[None, :])[0]
+    def f(tau, x):
+        dx = rhs(x[None, :], None if law is None else law(tau)[None, :])[0]
+        if not np.all(np.isfinite(dx)):
+            raise _Diverged(tau, x)
+        return dx
 
-    sol = solve_ivp(f, (times[0], times[-1]), x0, t_eval=times, method=method, rtol=rtol,
-                    atol=atol, **solver_kws)
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):
+            sol = solve_ivp(f, (times[0], times[-1]), x0, t_eval=times, method=method,
+                            rtol=rtol, atol=atol, **solver_kws)
+    except _Diverged as e:
+        raise ConvergenceError(f"integration stopped at t = {e.time:.6g} of {times[-1]:.6g}: "
+                               f"the right-hand side became non-finite at x = {e.state} "
+                               "(the solution diverges)") from None
     if sol.status != 0 or sol.y.shape[1] != len(times):
         reached = sol.t[-1] if sol.t.size else times[0]
         raise ConvergenceError(f"integration stopped at t = {reached:.6g} of {times[-1]:.6g}: "
