@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import discrepancy as dc
@@ -392,7 +392,7 @@ def test_huge_power_is_refused_quickly(saved, tmp_path):
 SYMBOLS = [x1, x2, u]
 atoms = st.one_of(st.sampled_from(SYMBOLS), st.integers(-5, 5).map(sp.Integer),
                   st.fractions(min_value=-3, max_value=3, max_denominator=7).map(sp.Rational),
-                  st.floats(-10, 10, allow_nan=False).map(sp.Float))
+                  st.floats(-10, 10, allow_nan=False, allow_subnormal=False).map(sp.Float))
 
 
 def _combine(children):
@@ -411,8 +411,9 @@ expressions = st.recursive(atoms, _combine, max_leaves=8)
 def test_expression_data_round_trip(expr):
     from discrepancy.symbolic import from_data, to_data
 
-    if expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
-        return
+    assume(not expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo))
+    # sympy Floats have an unbounded exponent; files store doubles
+    assume(all(f == 0 or 1e-300 < abs(f) < 1e300 for f in expr.atoms(sp.Float)))
     data = to_data(expr)
     assert json.loads(json.dumps(data)) == data   # plain JSON
     assert from_data(json.loads(json.dumps(data))) == expr
