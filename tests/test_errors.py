@@ -315,9 +315,6 @@ def test_u_given_to_a_model_without_inputs():
 
 
 @pytest.mark.timeout(5, method="signal")
-@pytest.mark.xfail(strict=True, reason="models/simulation.integrate: after the state overflows, "
-                   "LSODA keeps stepping (no step limit, no check for non-finite rhs) and "
-                   "simulate hangs instead of raising ConvergenceError")
 def test_simulation_blow_up_is_a_convergence_error():
     x = np.linspace(0.1, 1.0, 50)[:, None]
     m = model(feature_library=dc.PolynomialLibrary(degree=2)).fit(x, t=1.0, x_dot=x**2)
@@ -374,8 +371,6 @@ def test_sympy_expression_with_unsupported_function():
         model(feature_library=lib).fit(x, t=0.01)
 
 
-@pytest.mark.xfail(strict=True, reason="models/simulation.integrate: solve_ivp with one time "
-                   "returns sol.y as a list, and 'sol.y.shape' raises AttributeError")
 @pytest.mark.parametrize("t", [[0.0], 3.0], ids=["one_time", "scalar"])
 def test_simulate_with_fewer_than_two_times(fitted, t):
     try:

@@ -59,9 +59,15 @@ class CustomLibrary(BaseLibrary):
         return super().fit(names)
 
     def _transform(self, Z):
-        if self.expressions is not None:
+        if self.expressions is not None:  # expressions may use any variable, not a subset
             return np.column_stack([f(Z) for f in self._compiled])
         return super()._transform(Z)
+
+    def _transform_into(self, Z, out):
+        if self.expressions is not None:
+            out[...] = self._transform(Z)
+            return out
+        return super()._transform_into(Z, out)
 
     def _evaluate(self, Zs):
         return np.column_stack([np.asarray(f(Zs[:, j]), dtype=float) for f, j in self._funcs])

@@ -7,7 +7,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..data.trajectory import as_2d, as_times
-from ..errors import ConvergenceError, ParameterError, ShapeError
+from ..errors import ConvergenceError, ParameterError, ShapeError, describe
 
 
 class _Diverged(Exception):
@@ -56,6 +56,9 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
     if x0.shape != (n_states,) or not np.all(np.isfinite(x0)):
         raise ShapeError(f"x0 must be {n_states} finite numbers (one per state); "
                          f"got shape {np.shape(x0)}")
+    if np.ndim(t) != 1 or np.size(t) < 2:
+        raise ShapeError(f"t must be a 1-D array of at least 2 output times (the first is the "
+                         f"time of x0); got {describe(t)}")
     times = as_times("t", t, np.size(t))
     law = input_law(u, times, n_inputs, hold=u_hold)
 
