@@ -51,3 +51,14 @@ def test_auto_threshold_needs_sums_of_squares_from_fit_gram():
     theta = np.random.default_rng(0).standard_normal((100, 3))
     with pytest.raises(ParameterError, match="yy"):
         dc.STLSQ(threshold="auto").fit_gram(theta.T @ theta, theta.T @ theta[:, :1])
+
+
+def test_model_default_optimizer_needs_no_threshold(vdp_data, helpers):
+    """Defaults only (no optimizer given): the paper's discrepancy is found from noisy data."""
+    x = vdp_data.x + 0.01 * np.random.default_rng(9).standard_normal(vdp_data.x.shape)
+    model = dc.DiscrepancyModel(prior=helpers.vdp_rhs(0.1),
+                                feature_library=dc.PolynomialLibrary(degree=3),
+                                differentiation_method=dc.SavitzkyGolay(31, 3)).fit(x, t=0.01)
+    names, coef = model.get_feature_names(), model.coefficients()
+    assert {(i, names[j]) for i, j in zip(*np.nonzero(coef), strict=True)} == {
+        (1, "x2"), (1, "x1^2 x2")}

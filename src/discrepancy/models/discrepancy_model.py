@@ -24,7 +24,9 @@ class DiscrepancyModel:
             input symbols (then :meth:`to_sympy` and :meth:`to_casadi` give the whole hybrid
             model), or ``None`` for plain SINDy.
         feature_library: candidate terms Θ (default ``PolynomialLibrary(degree=2)``).
-        optimizer: sparse regression (default ``STLSQ(threshold=0.1)``).
+        optimizer: sparse regression (default ``STLSQ(threshold="auto")``: the threshold of
+            each equation chosen by BIC, so no hand tuning; pass ``STLSQ(threshold=0.1)``
+            for PySINDy's default).
         differentiation_method: a Differentiator or registered name (default finite
             differences); ignored when ``x_dot`` is given to :meth:`fit`.
         state_names: names of the n states (default ``x1 ... xn``).
@@ -79,7 +81,7 @@ class DiscrepancyModel:
             else PolynomialLibrary(degree=2)
         self.feature_library_ = copy.deepcopy(library).fit(self.variable_names_)
         self.optimizer_ = copy.deepcopy(self.optimizer) if self.optimizer is not None \
-            else STLSQ(threshold=0.1)
+            else STLSQ(threshold="auto")
         self.differentiation_method_ = get_differentiation_method(self.differentiation_method)
 
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
