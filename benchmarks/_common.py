@@ -127,7 +127,12 @@ def big_zarr(rows: int = BIG_ROWS):
 
 
 def peak_rss_mb() -> float:
-    """Peak resident memory of this process so far (MB), from getrusage."""
-    import resource
+    """Peak resident memory of this process so far (MB): VmHWM from /proc (getrusage's
+    ru_maxrss would include the parent's peak, which Linux carries across exec)."""
+    try:
+        with open("/proc/self/status") as f:
+            return next(int(line.split()[1]) for line in f if line.startswith("VmHWM")) / 1024
+    except (OSError, StopIteration):
+        import resource
 
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

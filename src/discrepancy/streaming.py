@@ -237,19 +237,6 @@ def _concat(a: Chunk, b: Chunk) -> Chunk:
                  where=b.where)
 
 
-def _with_last(it):
-    """Yield ``(item, is_last)`` looking one item ahead."""
-    it = iter(it)
-    try:
-        prev = next(it)
-    except StopIteration:
-        return
-    for item in it:
-        yield prev, False
-        prev = item
-    yield prev, True
-
-
 def residual_rows(model, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """Yield ``(z, y)`` for consecutive rows of one trajectory, equal to ``model.residual``
     of the whole trajectory (the model must be set up; chunks validated)."""
@@ -260,9 +247,13 @@ def residual_rows(model, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, 
 
 
 def _stitched(chunks, method):
-    """Yield ``(window, x_dot_or_smoothed, lo, hi)``; rows ``lo:hi`` of the window are exact."""
+    """Yield ``(window, x_dot_or_smoothed, lo, hi)``; rows ``lo:hi`` of the window are exact.
+
+    A window (carried rows plus one chunk) is differentiated once the next chunk shows it
+    is not the trajectory's last; chunks with ``x_dot`` pass straight through.
+    """
     window, first = None, True
-    for chunk, last in _with_last(chunks):
+    for chunk in chunks:
         if chunk.x_dot is not None:
             yield chunk, chunk.x_dot, 0, chunk.n_rows
             continue
@@ -273,40 +264,48 @@ def _stitched(chunks, method):
                 "depends on the whole trajectory), so it cannot be applied chunk by chunk; "
                 "use FiniteDifference() or SavitzkyGolay(), or compute x_dot first and stream "
                 "it with the chunks")
+        if window is not None and window.n_rows >= max(method.min_samples, 2 * h + 1):
+            xs, xd = method(window.x, window.t)  # not the last window: a chunk follows
+            yield replace(window, x=xs), xd, (0 if first else h), window.n_rows - h
+            window, first = window.rows(window.n_rows - 2 * h), False
         window = chunk if window is None else _concat(window, chunk)
-        if not last and window.n_rows < max(method.min_samples, 2 * h + 1):
-            continue
+    if window is not None:
         xs, xd = method(window.x, window.t)
-        lo, hi = (0 if first else h), (window.n_rows if last else window.n_rows - h)
-        smooth = replace(window, x=xs)
-        yield smooth, xd, lo, hi
-        window, first = window.rows(window.n_rows - 2 * h), False
+        yield replace(window, x=xs), xd, (0 if first else method.halo), window.n_rows
 
 
 # ------------------------------------------------------------------ fitting
 class _RowFeeder:
-    """Passes rows to a BlockAccumulator in whole blocks, carrying the remainder over."""
+    """Passes rows to a BlockAccumulator on the trajectory's block grid: whole blocks go
+    through as views, a partial block is kept (copied) until the next rows complete it."""
 
-    def __init__(self, acc: BlockAccumulator, limit: int = 8 * BLOCK_ROWS):
-        self.acc, self.limit = acc, limit
+    def __init__(self, acc: BlockAccumulator):
+        self.acc = acc
         self.z, self.y, self.rows = [], [], 0
 
     def add(self, z, y):
-        self.z.append(z)
-        self.y.append(y)
-        self.rows += z.shape[0]
-        if self.rows >= self.limit:
-            self._flush(whole_blocks=True)
+        if self.rows:
+            if self.rows + z.shape[0] < BLOCK_ROWS:
+                self._keep(z, y)
+                return
+            need = BLOCK_ROWS - self.rows
+            self.acc.add(np.concatenate([*self.z, z[:need]]), np.concatenate([*self.y, y[:need]]))
+            self.z, self.y, self.rows = [], [], 0
+            z, y = z[need:], y[need:]
+        cut = (z.shape[0] // BLOCK_ROWS) * BLOCK_ROWS
+        if cut:
+            self.acc.add(z[:cut], y[:cut])
+        if cut < z.shape[0]:
+            self._keep(z[cut:], y[cut:])
 
-    def _flush(self, whole_blocks):
-        z, y = np.concatenate(self.z), np.concatenate(self.y)
-        cut = (z.shape[0] // BLOCK_ROWS) * BLOCK_ROWS if whole_blocks else z.shape[0]
-        self.acc.add(z[:cut], y[:cut])
-        self.z, self.y, self.rows = [z[cut:]], [y[cut:]], z.shape[0] - cut
+    def _keep(self, z, y):
+        self.z.append(z.copy())
+        self.y.append(y.copy())
+        self.rows += z.shape[0]
 
     def end_trajectory(self):
         if self.rows:
-            self._flush(whole_blocks=False)
+            self.acc.add(np.concatenate(self.z), np.concatenate(self.y))
         self.z, self.y, self.rows = [], [], 0
         self.acc.finish_trajectory()
 
