@@ -184,10 +184,9 @@ class DiscrepancyModel:
     def equations(self, precision: int = 3) -> list[str]:
         """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``."""
         names = self.get_feature_names()
-        has_prior = self.prior is not None or getattr(self, "_prior_label", None)
         out = []
         for row in self.coef_:
-            parts = [] if not has_prior else ["prior"]
+            parts = [] if self.prior is None else ["prior"]
             for c, name in zip(row, names, strict=True):
                 if c != 0:
                     term = f"{abs(c):.{precision}f}" + ("" if name == "1" else f" {name}")
