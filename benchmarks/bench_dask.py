@@ -60,9 +60,8 @@ def main(rows: int):
                 body))
     print(f"\nRows counted by the reduction: {n} (expected {rows}). One run (1e8 rows is "
           "expensive), after a 1e5-row warm-up fit that lets the workers import the library. "
-          "The Dask graph sums per-block Gram statistics as a tree; the scheduler "
-          "and transfers cost time against the single-process stream on this 2-core machine, "
-          "and pay off when workers sit on several machines.")
+          "The Dask graph sums per-block Gram statistics as a tree; both worker processes share "
+          "this machine's 2 cores, and on a cluster the same graph spreads over its workers.")
 
 
 if __name__ == "__main__":
