@@ -30,64 +30,27 @@ Memory is bounded by about two chunks plus a 4096-row block of Θ.
 """
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
-from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, replace
+from collections.abc import Iterable, Iterator
+from dataclasses import replace
 
 import numpy as np
 
 from .accumulate import BLOCK_ROWS, BlockAccumulator
+from .data.chunks import (  # noqa: F401  (Chunk, ChunkSource, peek_layout: public here too)
+    FIELDS,
+    Chunk,
+    ChunkSource,
+    IterableSource,
+    _Layout,
+    _validated,
+    as_source,
+    peek_layout,
+)
 from .data.trajectory import Trajectory
-from .errors import DataError, ParameterError, ShapeError, describe
+from .errors import DataError, ParameterError, ShapeError
 
-FIELDS = ("x", "t", "u", "x_dot")
-
-
-@dataclass(frozen=True)
-class Chunk:
-    """Consecutive rows of one trajectory (see the module docstring).
-
-    Attributes:
-        x: states ``(k, n)``; t: times ``(k,)`` or ``None``; u: inputs ``(k, r)`` or
-        ``None``; x_dot: measured derivatives ``(k, n)`` or ``None``;
-        where: description used in error messages (e.g. ``"run3.h5 rows 0..65535"``).
-    """
-
-    x: np.ndarray
-    t: np.ndarray | None = None
-    u: np.ndarray | None = None
-    x_dot: np.ndarray | None = None
-    where: str | None = None
-
-    @property
-    def n_rows(self) -> int:
-        return self.x.shape[0]
-
-    def rows(self, start: int, stop: int | None = None) -> Chunk:
-        cut = slice(start, stop)
-        return replace(self, **{f: None if getattr(self, f) is None else getattr(self, f)[cut]
-                                for f in FIELDS})
-
-
-class ChunkSource(ABC):
-    """Data as trajectories, each an iterable of :class:`Chunk` in time order."""
-
-    #: total number of rows if known (for the progress bar), else None
-    n_samples: int | None = None
-
-    @abstractmethod
-    def trajectories(self) -> Iterator[Iterable[Chunk]]:
-        """Yield one iterable of chunks per trajectory."""
-
-
-class IterableSource(ChunkSource):
-    """Trajectories given as iterables of chunks (one iterable per trajectory)."""
-
-    def __init__(self, trajectories: list):
-        self._trajectories = trajectories
-
-    def trajectories(self):
-        yield from self._trajectories
+__all__ = ["Chunk", "ChunkSource", "IterableSource", "fit_streamed", "is_streamed",
+           "stream_statistics"]
 
 
 def _is_dask(x) -> bool:
@@ -104,130 +67,6 @@ def is_streamed(x) -> bool:
     if isinstance(x, (list, tuple)):
         return bool(x) and all(_is_dask(e) or _is_chunk_stream(e) for e in x)
     return _is_dask(x) or _is_chunk_stream(x)
-
-
-def as_source(x) -> ChunkSource:
-    if isinstance(x, ChunkSource):
-        return x
-    if isinstance(x, Iterator):
-        return IterableSource([x])
-    if isinstance(x, (list, tuple)) and all(isinstance(e, ChunkSource) for e in x):
-        return _Joined(list(x))
-    if isinstance(x, (list, tuple)) and all(isinstance(e, Iterator) for e in x):
-        return IterableSource(list(x))
-    raise ParameterError(f"x must be an iterator of chunks, a ChunkSource or a list of either "
-                         f"kind (not mixed); got {describe(x)}")
-
-
-class _Joined(ChunkSource):
-    def __init__(self, sources):
-        self.sources = sources
-        sizes = [s.n_samples for s in sources]
-        self.n_samples = None if None in sizes else sum(sizes)
-
-    def trajectories(self):
-        for s in self.sources:
-            yield from s.trajectories()
-
-
-def as_chunk(item, where: str) -> Chunk:
-    """A :class:`Chunk` from an array (x only), a mapping, or a Chunk."""
-    if isinstance(item, Chunk):
-        return item if item.where else replace(item, where=where)
-    if isinstance(item, Mapping):
-        unknown = sorted(set(item) - set(FIELDS))
-        if unknown or "x" not in item:
-            raise ShapeError(f"{where}: a chunk mapping needs key 'x' and may have {FIELDS}; "
-                             f"got keys {sorted(item)}")
-        return Chunk(**{k: item[k] for k in FIELDS if k in item}, where=where)
-    if isinstance(item, np.ndarray) or hasattr(item, "__array__"):
-        return Chunk(x=item, where=where)
-    raise ShapeError(f"{where}: a chunk must be an array of x, a mapping with keys {FIELDS} or "
-                     f"a Chunk; got {describe(item)}")
-
-
-# ------------------------------------------------------------------ validation
-@dataclass
-class _Layout:
-    """Columns and optional fields fixed by the first chunk; every later chunk must match."""
-
-    n: int
-    r: int
-    has: dict
-
-
-def _check_array(name, a, chunk, offset, *, rows, cols, ndim=2):
-    try:
-        a = np.asarray(a, dtype=float)
-    except (TypeError, ValueError) as e:
-        raise ShapeError(f"{chunk.where}: {name} must be numeric; {e}") from None
-    if ndim == 2 and a.ndim == 1 and cols in (None, 1) and name == "u":
-        a = a[:, None]
-    if a.ndim != ndim or (rows is not None and a.shape[0] != rows) or \
-            (cols is not None and a.shape[1] != cols):
-        want = f"({rows if rows is not None else 'k'}" + ("" if ndim == 1 else
-                                                          f", {cols if cols else 'n'}") + ")"
-        raise ShapeError(f"{chunk.where}: {name} must have shape {want} like the chunks before "
-                         f"it; got {a.shape}")
-    bad = ~np.isfinite(a)
-    if bad.any():
-        row, *col = np.argwhere(bad)[0]
-        col_txt = f", column {int(col[0])}" if col else ""
-        raise DataError(f"{chunk.where}: {name} has a non-finite value {a[(row, *col)]} at row "
-                        f"{int(row)} of the chunk (row {offset + int(row)} of the trajectory"
-                        f"{col_txt}); {int(bad.sum())} non-finite values in this chunk. "
-                        "Nothing was fitted; clean or drop those rows first")
-    return a
-
-
-def _validate(chunk: Chunk, layout: _Layout, offset: int, step: float, t_last) -> Chunk:
-    x = _check_array("x", chunk.x, chunk, offset, rows=None, cols=layout.n)
-    k = x.shape[0]
-    for f in ("t", "u", "x_dot"):
-        if (getattr(chunk, f) is None) == layout.has[f]:
-            state = "has no" if layout.has[f] else "has"
-            raise ShapeError(f"{chunk.where}: chunk {state} {f}, unlike the first chunk; every "
-                             "chunk must carry the same fields")
-    u = None if chunk.u is None else _check_array("u", chunk.u, chunk, offset, rows=k,
-                                                  cols=layout.r)
-    xd = None if chunk.x_dot is None else _check_array("x_dot", chunk.x_dot, chunk, offset,
-                                                       rows=k, cols=layout.n)
-    if chunk.t is None:
-        t = np.arange(offset, offset + k) * step
-    else:
-        t = _check_array("t", chunk.t, chunk, offset, rows=k, cols=None, ndim=1)
-        steps = np.diff(t if t_last is None else np.r_[t_last, t])
-        if np.any(steps <= 0):
-            i = int(np.argmax(steps <= 0))
-            raise DataError(f"{chunk.where}: t must increase strictly, also across chunks; "
-                            f"it stops increasing at row {offset + i - (t_last is None) + 1} "
-                            "of the trajectory")
-    return Chunk(x, t, u, xd, chunk.where)
-
-
-def _validated(items: Iterable, traj: int, step: float, layout: _Layout | None):
-    """Yield validated chunks of trajectory ``traj`` (creating the layout from the first)."""
-    offset, t_last = 0, None
-    for i, item in enumerate(items):
-        where = f"chunk {i} of trajectory {traj}"
-        chunk = as_chunk(item, where)
-        if chunk.where != where:
-            chunk = replace(chunk, where=f"{where} ({chunk.where})")
-        if layout is None or layout.has is None:
-            x = np.asarray(chunk.x)
-            if layout is not None and x.ndim == 2 and x.shape[1] != layout.n:
-                raise ShapeError(f"{where}: x has {x.shape[1]} columns; the model has "
-                                 f"{layout.n} states")
-            u = None if chunk.u is None else np.asarray(chunk.u)
-            if x.ndim != 2:
-                raise ShapeError(f"{where}: x must be 2-D (rows, states); got shape {x.shape}")
-            layout = _Layout(x.shape[1], 0 if u is None else (1 if u.ndim == 1 else u.shape[1]),
-                             {f: getattr(chunk, f) is not None for f in ("t", "u", "x_dot")})
-        chunk = _validate(chunk, layout, offset, step, t_last)
-        if chunk.n_rows:
-            yield layout, chunk
-            offset += chunk.n_rows
-            t_last = chunk.t[-1]
 
 
 # ------------------------------------------------------------------ stitching
@@ -320,14 +159,6 @@ def step_of(t) -> float:
     if not np.isfinite(float(t)) or float(t) <= 0:
         raise DataError(f"t as a time step must be a positive finite number; got {t}")
     return float(t)
-
-
-def peek_layout(source: ChunkSource) -> tuple[int, int]:
-    """``(n_states, n_inputs)`` from the first chunk of ``source``."""
-    for k, items in enumerate(source.trajectories()):
-        for layout, _ in _validated(items, k, 1.0, None):
-            return layout.n, layout.r
-    raise ShapeError("x holds no rows")
 
 
 def stream_statistics(model, source: ChunkSource, step: float, *, progress: bool | None = None,

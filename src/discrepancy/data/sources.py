@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ShapeError, UnknownNameError
-from ..streaming import Chunk, ChunkSource
+from .chunks import Chunk, ChunkSource
 
 DEFAULT_CHUNK = 65536
 FIELDS = ("x", "t", "u", "x_dot")
