@@ -1,0 +1,230 @@
+"""Mounted double pendulum (cart locked) with viscous joint friction, paper Section IV.B.
+
+State ``x = [phi1, phi2, dphi1, dphi2]`` (rad, rad/s); both angles are absolute and
+measured from the upright, so ``phi = pi`` hangs down. The energy is the paper's
+eqs. (29)-(35): centres of mass at ``x1 = a1 sin phi1``, ``y1 = a1 cos phi1``,
+``x2 = L1 sin phi1 + a2 sin phi2``, ``y2 = L1 cos phi1 + a2 cos phi2``,
+``T = m1 v1^2/2 + m2 v2^2/2 + (I1 dphi1^2 + I2 dphi2^2)/2`` and ``V = g (m1 y1 + m2 y2)``.
+Joint friction enters through the Rayleigh function
+``D = k1 dphi1^2 / 2 + k2 (dphi1 - dphi2)^2 / 2``; the equations of motion are derived
+from ``T``, ``V`` and ``D`` with sympy (:func:`~discrepancy.systems.mechanics.lagrange_equations`).
+"""
+from __future__ import annotations
+
+from dataclasses import astuple, dataclass, fields
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import sympy as sp
+from scipy.integrate import solve_ivp
+
+from ..errors import ConvergenceError, DataError, ModelFileError, ParameterError, ShapeError
+from ..symbolic import compile_numpy, symbol
+from .base import System
+from .mechanics import lagrange_equations
+
+STATE_NAMES = ("phi1", "phi2", "dphi1", "dphi2")
+PARAMETER_ORDER = ("m1", "m2", "a1", "a2", "L1", "I1", "I2", "k1", "k2", "g")
+
+
+@dataclass(frozen=True)
+class DoublePendulumParameters:
+    """Physical parameters; defaults are the paper's Table 1 (SI units).
+
+    Attributes:
+        m1, m2: arm masses (kg). a1, a2: pivot-to-centre-of-mass distances (m).
+        L1: length of the first arm, pivot to pivot (m). I1, I2: inertias about the
+        centres of mass (kg m^2). k1, k2: viscous friction of joint 1 and joint 2
+        (N m s / rad). g: gravity (m/s^2).
+    """
+
+    m1: float = 0.2704
+    m2: float = 0.2056
+    a1: float = 0.1910
+    a2: float = 0.1621
+    L1: float = 0.2667
+    I1: float = 0.003
+    I2: float = 0.0011
+    k1: float = 7.24e-4
+    k2: float = 1.65e-4
+    g: float = 9.818
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            number = isinstance(value, (int, float, np.floating, np.integer))
+            if not number or not np.isfinite(value):
+                raise ParameterError(f"{f.name} must be a finite number; got {value!r}")
+            if f.name in ("k1", "k2") and value < 0:
+                raise ParameterError(f"friction coefficient {f.name} must be >= 0; got {value}")
+            if f.name not in ("k1", "k2") and value <= 0:
+                raise ParameterError(f"{f.name} must be > 0; got {value}")
+            object.__setattr__(self, f.name, float(value))
+
+    @classmethod
+    def from_array(cls, values) -> DoublePendulumParameters:
+        """From ``[m1 m2 a1 a2 L1 I1 I2 k1 k2 g]`` (the MultiArm-Pendulum file's order)."""
+        arr = np.asarray(values, dtype=float).ravel()
+        if arr.shape != (len(PARAMETER_ORDER),):
+            raise ShapeError(f"parameter array must hold {len(PARAMETER_ORDER)} values "
+                             f"[{' '.join(PARAMETER_ORDER)}]; got {arr.shape[0]}")
+        return cls(**dict(zip(PARAMETER_ORDER, arr.tolist(), strict=True)))
+
+    @classmethod
+    def from_mat(cls, path, *, variable: str = "EstimatedParameters") -> DoublePendulumParameters:
+        """From a MATLAB file holding ``variable`` = ``[m1 m2 a1 a2 L1 I1 I2 k1 k2 g]``,
+        e.g. ``EstimatedParameters_DoublePendulum.mat`` of the MultiArm-Pendulum rig."""
+        from scipy.io import loadmat
+
+        path = Path(path)
+        if not path.is_file():
+            raise DataError(f"parameter file {str(path)!r} does not exist")
+        try:
+            contents = loadmat(path)
+        except Exception as e:  # scipy raises several types for non-MAT files
+            raise ModelFileError(f"{str(path)!r} is not a readable MATLAB file ({e})") from None
+        if variable not in contents:
+            found = [k for k in contents if not k.startswith("__")]
+            raise DataError(f"{str(path)!r} has no variable {variable!r}; found {found}")
+        return cls.from_array(contents[variable])
+
+    def as_dict(self) -> dict[str, float]:
+        return dict(zip(PARAMETER_ORDER, astuple(self), strict=True))
+
+
+@cache
+def _symbolic_model():
+    """Energy, dissipation and equations of motion with symbolic parameters (derived once)."""
+    phi1, phi2, dphi1, dphi2 = (symbol(n) for n in STATE_NAMES)
+    m1, m2, a1, a2, L1, I1, I2, k1, k2, g = (symbol(n) for n in PARAMETER_ORDER)
+    t = sp.Symbol("t", real=True)
+    q = [sp.Function("q1")(t), sp.Function("q2")(t)]
+    x1, y1 = a1 * sp.sin(q[0]), a1 * sp.cos(q[0])
+    x2, y2 = L1 * sp.sin(q[0]) + a2 * sp.sin(q[1]), L1 * sp.cos(q[0]) + a2 * sp.cos(q[1])
+    speed2 = [sp.diff(x1, t) ** 2 + sp.diff(y1, t) ** 2, sp.diff(x2, t) ** 2 + sp.diff(y2, t) ** 2]
+    kinetic = (m1 * speed2[0] + m2 * speed2[1]) / 2 \
+        + (I1 * sp.diff(q[0], t) ** 2 + I2 * sp.diff(q[1], t) ** 2) / 2
+    to_state = {sp.diff(q[0], t): dphi1, sp.diff(q[1], t): dphi2}
+    kinetic = sp.simplify(kinetic.subs(to_state).subs({q[0]: phi1, q[1]: phi2}))
+    potential = g * (m1 * y1 + m2 * y2).subs({q[0]: phi1, q[1]: phi2})
+    dissipation = k1 * dphi1 ** 2 / 2 + k2 * (dphi1 - dphi2) ** 2 / 2
+    _, mass, rest = lagrange_equations(kinetic, potential, [phi1, phi2], [dphi1, dphi2],
+                                       dissipation=dissipation)
+    return kinetic, potential, dissipation, mass, rest
+
+
+class DoublePendulum(System):
+    """Mounted double pendulum with viscous joint friction (true system of Section IV.B).
+
+    Args:
+        params: a :class:`DoublePendulumParameters` (default: the paper's Table 1).
+
+    ``energy`` is the conservative model energy ``H_m = T + V`` (J); ``rhs`` includes the
+    friction torques ``k1 dphi1`` (joint 1) and ``k2 (dphi1 - dphi2)`` (joint 2), so
+    ``dH_m/dt = -(k1 dphi1^2 + k2 (dphi1 - dphi2)^2)`` along trajectories.
+    """
+
+    state_names = STATE_NAMES
+    input_names = ()
+
+    def __init__(self, params: DoublePendulumParameters | None = None):
+        self.params = params
+
+    @property
+    def parameters(self) -> DoublePendulumParameters:
+        p = self.params if self.params is not None else DoublePendulumParameters()
+        if not isinstance(p, DoublePendulumParameters):
+            raise ParameterError(f"params must be DoublePendulumParameters; got {type(p).__name__}")
+        return p
+
+    def _numbers(self, *, friction: bool = True) -> dict:
+        values = self.parameters.as_dict()
+        if not friction:
+            values.update(k1=0.0, k2=0.0)
+        return {symbol(k): v for k, v in values.items()}
+
+    def sympy_energy(self, *, symbolic_parameters: bool = False) -> tuple[sp.Expr, sp.Expr]:
+        """``(T, V)`` as sympy expressions of the state symbols (J)."""
+        kinetic, potential, *_ = _symbolic_model()
+        if symbolic_parameters:
+            return kinetic, potential
+        subs = self._numbers()
+        return kinetic.subs(subs), potential.subs(subs)
+
+    def sympy_rhs(self, *, friction: bool = True) -> list[sp.Expr]:
+        """``[dphi1, dphi2, ddphi1, ddphi2]`` as explicit sympy expressions (for export)."""
+        *_, mass, rest = _symbolic_model()
+        subs = self._numbers(friction=friction)
+        acc = mass.subs(subs).LUsolve(rest.subs(subs))
+        return [symbol("dphi1"), symbol("dphi2"), *[sp.simplify(a) for a in acc]]
+
+    def _compiled(self):
+        key = tuple(self._numbers().values())
+        if getattr(self, "_cache_key", None) != key:
+            kinetic, potential, _, mass, rest = _symbolic_model()
+            subs = self._numbers()
+            exprs = (kinetic, potential, mass[0, 0], mass[0, 1], mass[1, 1], rest[0], rest[1])
+            f = [compile_numpy(e.subs(subs), STATE_NAMES) for e in exprs]
+            self._cache_key, self._functions = key, f
+        return self._functions
+
+    def _state(self, x) -> np.ndarray:
+        arr = np.asarray(x, dtype=float)
+        if arr.ndim == 1:
+            arr = arr[None, :]
+        if arr.ndim != 2 or arr.shape[1] != 4:
+            raise ShapeError(f"x must be (m, 4) = [phi1, phi2, dphi1, dphi2]; "
+                             f"got shape {arr.shape}")
+        return arr
+
+    def kinetic_energy(self, x) -> np.ndarray:
+        """``T`` (J), shape ``(m,)``."""
+        return self._compiled()[0](self._state(x))
+
+    def potential_energy(self, x) -> np.ndarray:
+        """``V`` (J), shape ``(m,)``; zero at the pivot height, negative hanging down."""
+        return self._compiled()[1](self._state(x))
+
+    def energy(self, x) -> np.ndarray:
+        """Conservative model energy ``H_m = T + V`` (J), shape ``(m,)``."""
+        x = self._state(x)
+        f = self._compiled()
+        return f[0](x) + f[1](x)
+
+    def dissipated_power(self, x) -> np.ndarray:
+        """Power lost to joint friction ``k1 dphi1^2 + k2 (dphi1 - dphi2)^2`` (W), ``(m,)``."""
+        x = self._state(x)
+        p = self.parameters
+        return p.k1 * x[:, 2] ** 2 + p.k2 * (x[:, 2] - x[:, 3]) ** 2
+
+    def rhs(self, x, u=None) -> np.ndarray:
+        """True dynamics ``dx/dt`` ``(m, 4)`` for ``x`` ``(m, 4)``; ``u`` is ignored (no input)."""
+        x = self._state(x)
+        _, _, m11, m12, m22, b1, b2 = self._compiled()
+        a, c, d, r1, r2 = m11(x), m12(x), m22(x), b1(x), b2(x)
+        det = a * d - c * c
+        return np.column_stack([x[:, 2], x[:, 3], (d * r1 - c * r2) / det, (a * r2 - c * r1) / det])
+
+    def flawed_model(self):
+        """The frictionless pendulum (conservative prior), ``f_m(x, u)``."""
+        prior = DoublePendulum(DoublePendulumParameters(**{**self.parameters.as_dict(),
+                                                           "k1": 0.0, "k2": 0.0}))
+        return lambda x, u=None: prior.rhs(x)
+
+    def simulate(self, x0, t, *, rtol: float = 1e-10, atol: float = 1e-10) -> np.ndarray:
+        """Integrate from ``x0`` ``(4,)`` and return the states at times ``t`` ``(m,)``, ``(m, 4)``.
+
+        Uses scipy's DOP853 with tight tolerances (the energy tests rely on them).
+        """
+        x0 = self._state(x0)
+        if x0.shape[0] != 1:
+            raise ShapeError(f"x0 must be one state of 4 values; got shape {np.shape(x0)}")
+        t = np.asarray(t, dtype=float)
+        if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0):
+            raise DataError("t must be a strictly increasing 1-D array of at least 2 times")
+        sol = solve_ivp(lambda _, y: self.rhs(y[None, :])[0], (t[0], t[-1]), x0[0],
+                        method="DOP853", t_eval=t, rtol=rtol, atol=atol)
+        if not sol.success:
+            raise ConvergenceError(f"double pendulum integration failed: {sol.message}")
+        return sol.y.T
