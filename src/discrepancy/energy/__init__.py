@@ -1,0 +1,16 @@
+"""Energy discrepancy: the energy a conservative model misses, learned as sparse friction laws."""
+from .dissipation import (
+    DissipationFit,
+    FrictionTerm,
+    default_friction_library,
+    fit_dissipation,
+    integrated_powers,
+    select_terms,
+)
+from .hamiltonian import EnergyTautologyWarning, check_span, energy_span_residual
+from .metrics import error_summary, percent_error
+from .model import EnergyDiscrepancy
+
+__all__ = ["DissipationFit", "EnergyDiscrepancy", "EnergyTautologyWarning", "FrictionTerm",
+           "check_span", "default_friction_library", "energy_span_residual", "error_summary",
+           "fit_dissipation", "integrated_powers", "percent_error", "select_terms"]

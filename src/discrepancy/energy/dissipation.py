@@ -1,0 +1,169 @@
+"""The dissipation form: energy lost as the time integral of sparse, non-negative friction power.
+
+``dH(t) = c + sum_j xi_j * int_0^t theta_j(dq) dt`` with ``xi_j >= 0``. Each ``theta_j`` is the
+power (per unit coefficient) of one friction law, a non-negative function of the joint speeds,
+so every learned model dissipates (passivity) and its coefficients are the friction laws.
+The integral needs velocities only, never accelerations. ``c`` absorbs the error of the
+reference energy ``E0 = H_m(x(0))``, which comes from a single noisy sample.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+import sympy as sp
+from scipy.integrate import cumulative_trapezoid
+from scipy.optimize import lsq_linear, nnls
+
+from ..errors import ParameterError
+from ..symbolic import compile_numpy, symbol
+
+
+@dataclass(frozen=True)
+class FrictionTerm:
+    """One candidate friction law.
+
+    Attributes:
+        name: short label, e.g. ``"viscous joint 1"``.
+        power: sympy expression of the dissipated power per unit coefficient (W / [unit]),
+            non-negative, in the velocity symbols.
+        unit: SI unit of the coefficient, e.g. ``"N m s"``.
+        torque: the torque law it stands for, for printing.
+    """
+
+    name: str
+    power: sp.Expr
+    unit: str
+    torque: str
+
+
+def default_friction_library(velocity_names=("dphi1", "dphi2"), *, stribeck_speed: float = 0.1,
+                             coulomb_smoothing: float | None = None) -> tuple[FrictionTerm, ...]:
+    """Friction laws a tribologist would try for the two joints of a double pendulum.
+
+    Joint 1 turns at ``w1 = dphi1``, joint 2 at ``w2 = dphi1 - dphi2``. Per joint: viscous
+    ``k w`` (power ``k w^2``), Coulomb ``F sign(w)`` (power ``F |w|``; with
+    ``coulomb_smoothing = eps`` (rad/s) ``F tanh(w/eps)``, power ``F w tanh(w/eps)``), and a
+    Stribeck excess ``F_s exp(-(w/v_s)^2) sign(w)``; per arm: quadratic air drag
+    ``c dphi |dphi|`` (power ``c |dphi|^3``).
+    """
+    if stribeck_speed <= 0:
+        raise ParameterError(f"stribeck_speed must be > 0 rad/s; got {stribeck_speed}")
+    if coulomb_smoothing is not None and coulomb_smoothing <= 0:
+        raise ParameterError("coulomb_smoothing must be > 0 rad/s or None; "
+                             f"got {coulomb_smoothing}")
+    d1, d2 = (symbol(n) for n in velocity_names)
+    joints = {"joint 1": d1, "joint 2": d1 - d2}
+    terms = []
+    for label, w in joints.items():
+        terms.append(FrictionTerm(f"viscous {label}", w ** 2, "N m s", f"k ({w})"))
+    for label, w in joints.items():
+        if coulomb_smoothing is None:
+            power, law = sp.Abs(w), f"F sign({w})"
+        else:
+            eps = sp.Float(coulomb_smoothing)
+            power, law = w * sp.tanh(w / eps), f"F tanh(({w})/{coulomb_smoothing:g})"
+        terms.append(FrictionTerm(f"Coulomb {label}", power, "N m", law))
+    for label, d in (("arm 1", d1), ("arm 2", d2)):
+        terms.append(FrictionTerm(f"air drag {label}", sp.Abs(d) ** 3, "N m s^2",
+                                  f"c {d} |{d}|"))
+    vs = sp.Float(stribeck_speed)
+    for label, w in joints.items():
+        terms.append(FrictionTerm(f"Stribeck {label}", sp.Abs(w) * sp.exp(-(w / vs) ** 2), "N m",
+                                  f"F_s exp(-(({w})/{stribeck_speed:g})^2) sign({w})"))
+    return tuple(terms)
+
+
+def integrated_powers(terms, velocities: np.ndarray, t: np.ndarray,
+                      velocity_names=("dphi1", "dphi2")) -> np.ndarray:
+    """``int_0^t theta_j dt`` (trapezoid) for every term: ``(m, p)`` (J per unit coefficient)."""
+    columns = [compile_numpy(term.power, list(velocity_names))(velocities) for term in terms]
+    return cumulative_trapezoid(np.column_stack(columns), t, axis=0, initial=0.0)
+
+
+def _nonnegative_fit(features: np.ndarray, target: np.ndarray, block: int | None = None
+                     ) -> np.ndarray:
+    """``[c, xi]`` of ``target ~ c + features @ xi`` with ``xi >= 0``.
+
+    ``block=None``: least squares on the cumulative curves. ``block=b`` (samples): the energy
+    lost over consecutive blocks of ``b`` samples is fitted with *relative* weights
+    ``1 / loss``, so late, low-energy blocks count as much as early ones (an absolute fit is
+    dominated by the first seconds of a decaying swing); ``c`` is then the mean residual.
+    """
+    if block is not None:
+        idx = np.arange(0, len(target), block)
+        loss, gained = np.diff(target[idx]), np.diff(features[idx], axis=0)
+        w = 1.0 / np.maximum(np.abs(loss), 1e-3 * np.max(np.abs(loss)))
+        scale = np.maximum(np.max(np.abs(gained), axis=0), 1e-300)
+        xi, _ = nnls(gained * w[:, None] / scale, loss * w)
+        xi = xi / scale
+        return np.concatenate([[np.mean(target - features @ xi)], xi])
+    design = np.column_stack([np.ones(len(target)), features])
+    scale = np.maximum(np.max(np.abs(design), axis=0), 1e-300)
+    k = features.shape[1]
+    sol = lsq_linear(design / scale, target, bounds=([-np.inf] + [0.0] * k, [np.inf] * (k + 1)),
+                     method="bvls")
+    return sol.x / scale
+
+
+def _predict(coef: np.ndarray, features: np.ndarray) -> np.ndarray:
+    return coef[0] + features @ coef[1:]
+
+
+def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 4,
+                 holdout: float = 0.2, tolerance: float = 0.1, block: int | None = None
+                 ) -> tuple[tuple[int, ...], list]:
+    """Best non-negative subset of at most ``max_terms`` columns, chosen by forecasting.
+
+    Every subset is fitted on the first ``1 - holdout`` of the samples and scored by the
+    largest error with which it continues over the last ``holdout`` part, relative to that
+    part's own ``dH`` range, which is exactly the task a validation window poses. The
+    smallest subset within ``(1 + tolerance)`` of the best score wins (parsimony); ties go to
+    the lower score. ``holdout=0`` scores the training RMS error instead. ``block`` chooses
+    the fit (see ``_nonnegative_fit``).
+
+    Returns ``(support, candidates)`` with ``candidates`` a list of ``(score, subset)``.
+    """
+    m, p = features.shape
+    if not 1 <= max_terms <= p:
+        raise ParameterError(f"max_terms must be in [1, {p}] (number of terms); got {max_terms}")
+    if not 0 <= holdout < 0.9:
+        raise ParameterError(f"holdout must be a fraction in [0, 0.9); got {holdout}")
+    cut = int(round(m * (1 - holdout)))
+    candidates = []
+    for k in range(1, max_terms + 1):
+        for subset in combinations(range(p), k):
+            cols = features[:, subset]
+            coef = _nonnegative_fit(cols[:cut], delta_h[:cut], block)
+            error = delta_h - _predict(coef, cols)
+            if holdout > 0:
+                score = np.max(np.abs(error[cut:])) / max(np.ptp(delta_h[cut:]), 1e-300)
+            else:
+                score = np.sqrt(np.mean(error ** 2))
+            if np.any(coef[1:] == 0):   # a subset with a dropped term duplicates a smaller one
+                score = np.inf
+            candidates.append((float(score), subset))
+    best = min(s for s, _ in candidates)
+    fine = [(len(sub), s, sub) for s, sub in candidates if s <= best * (1 + tolerance)]
+    return min(fine)[2], sorted(candidates)
+
+
+@dataclass(frozen=True)
+class DissipationFit:
+    """Result of :func:`fit_dissipation`: the chosen terms, their coefficients and the offset."""
+
+    terms: tuple[FrictionTerm, ...]
+    coefficients: np.ndarray     # (k,), in each term's unit
+    offset: float                # J
+    candidates: list             # (score, names) of every subset tried
+
+
+def fit_dissipation(features: np.ndarray, delta_h: np.ndarray, terms,
+                    **selection) -> DissipationFit:
+    """Select terms (:func:`select_terms`) and refit them on all samples."""
+    support, candidates = select_terms(features, delta_h, **selection)
+    coef = _nonnegative_fit(features[:, support], delta_h, selection.get("block"))
+    named = [(s, [terms[i].name for i in sub]) for s, sub in candidates]
+    return DissipationFit(terms=tuple(terms[i] for i in support), coefficients=coef[1:],
+                          offset=float(coef[0]), candidates=named)
