@@ -6,6 +6,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..errors import ParameterError
+
 
 class System(ABC):
     """A dynamical system with true dynamics and, where the paper has one, a flawed prior.
@@ -32,3 +34,23 @@ class System(ABC):
     @property
     def n_states(self) -> int:
         return len(self.state_names)
+
+
+def check_physical_parameters(params, *, may_be_zero=("k1", "k2")) -> None:
+    """Validate a frozen dataclass of physical constants in place.
+
+    Every field must be a finite number, > 0 (>= 0 for the names in ``may_be_zero``,
+    e.g. friction coefficients); values are stored as floats.
+    """
+    from dataclasses import fields
+
+    for f in fields(params):
+        value = getattr(params, f.name)
+        number = isinstance(value, (int, float, np.floating, np.integer)) and \
+            not isinstance(value, bool)
+        bound = ">= 0" if f.name in may_be_zero else "> 0"
+        if not number or not np.isfinite(value) or value < 0 or \
+                (value == 0 and f.name not in may_be_zero):
+            raise ParameterError(f"{type(params).__name__}.{f.name} must be a finite number "
+                                 f"{bound}; got {value!r}")
+        object.__setattr__(params, f.name, float(value))

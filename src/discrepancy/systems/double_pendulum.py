@@ -11,7 +11,7 @@ from ``T``, ``V`` and ``D`` with sympy (:func:`~discrepancy.systems.mechanics.la
 """
 from __future__ import annotations
 
-from dataclasses import astuple, dataclass, fields
+from dataclasses import astuple, dataclass
 from functools import cache
 from pathlib import Path
 
@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp
 
 from ..errors import ConvergenceError, DataError, ModelFileError, ParameterError, ShapeError
 from ..symbolic import compile_numpy, symbol
-from .base import System
+from .base import System, check_physical_parameters
 from .mechanics import lagrange_equations
 
 STATE_NAMES = ("phi1", "phi2", "dphi1", "dphi2")
@@ -51,16 +51,7 @@ class DoublePendulumParameters:
     g: float = 9.818
 
     def __post_init__(self):
-        for f in fields(self):
-            value = getattr(self, f.name)
-            number = isinstance(value, (int, float, np.floating, np.integer))
-            if not number or not np.isfinite(value):
-                raise ParameterError(f"{f.name} must be a finite number; got {value!r}")
-            if f.name in ("k1", "k2") and value < 0:
-                raise ParameterError(f"friction coefficient {f.name} must be >= 0; got {value}")
-            if f.name not in ("k1", "k2") and value <= 0:
-                raise ParameterError(f"{f.name} must be > 0; got {value}")
-            object.__setattr__(self, f.name, float(value))
+        check_physical_parameters(self)
 
     @classmethod
     def from_array(cls, values) -> DoublePendulumParameters:

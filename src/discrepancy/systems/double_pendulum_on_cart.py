@@ -22,7 +22,7 @@ import sympy as sp
 
 from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import compile_numpy, symbol
-from .base import System
+from .base import System, check_physical_parameters
 from .mechanics import lagrange_equations
 
 STATE_NAMES = ("phi1", "phi2", "s", "dphi1", "dphi2", "ds")
@@ -51,12 +51,7 @@ class CartPendulumParameters:
     g: float = 9.818
 
     def __post_init__(self):
-        for f in fields(self):
-            v = getattr(self, f.name)
-            ok = isinstance(v, (int, float, np.floating, np.integer)) and np.isfinite(v)
-            if not ok or v < 0 or (v == 0 and f.name not in ("k1", "k2")):
-                raise ParameterError(f"CartPendulumParameters.{f.name} must be a finite number "
-                                     f"{'>= 0' if f.name in ('k1', 'k2') else '> 0'}; got {v!r}")
+        check_physical_parameters(self)
 
     def scaled(self, factors) -> CartPendulumParameters:
         """A copy with each parameter multiplied by ``factors[name]`` (a mapping)."""
