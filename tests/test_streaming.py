@@ -53,7 +53,7 @@ def rel(a, b):
 
 def test_blocked_accumulation_is_the_plain_sum_and_independent_of_threads():
     rng = np.random.default_rng(3)
-    rows = 3 * BLOCK_ROWS + 123
+    rows = 20 * BLOCK_ROWS + 123  # enough blocks for two threads
     z, y = rng.standard_normal((rows, 3)), rng.standard_normal((rows, 2))
     lib = dc.PolynomialLibrary(degree=3).fit(["a", "b", "c"])
     theta = lib.transform(z)

@@ -14,13 +14,14 @@ machine a 4096-row ``ΘᵀΘ`` took 0.4 to 130 ms (threads spinning against othe
 processes); pinned to one BLAS thread it takes 0.45 ms (about 55 GFlop/s), and
 blocks of 2048 to 4096 rows beat 32768 rows (which spill the cache) by 1.5-2x.
 So BLAS runs single-threaded here and parallelism comes from our threads,
-one per lane group. Θ is written into one reused buffer per lane: allocating a
-fresh 1.8 MB block each time cost ~450 page faults per block, 0.23 s of page
-faults per 1e6 rows against 0.025 s of arithmetic.
+one per lane group, from one process-wide pool. Θ is written into one reused
+buffer per thread: allocating a fresh 1.8 MB block each time cost ~450 page
+faults per block, 0.23 s of page faults per 1e6 rows against 0.025 s of arithmetic.
 """
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
@@ -30,8 +31,32 @@ from .optimizers.gram import GramStatistics
 
 BLOCK_ROWS = 4096
 LANES = 4
+#: threads only pay off for calls with several blocks each (measured on 3-block trajectories)
+MIN_BLOCKS_PER_THREAD = 8
 
 _controller = None
+_pool: ThreadPoolExecutor | None = None
+_local = threading.local()
+
+
+def _executor(threads: int) -> ThreadPoolExecutor:
+    """One process-wide pool, created on first use (thread start-up measured ~1 ms each,
+    which dominated fits of many short trajectories when pools were made per call)."""
+    global _pool
+    if _pool is None or _pool._max_workers < threads:
+        _pool = ThreadPoolExecutor(threads, thread_name_prefix="discrepancy-gram")
+    return _pool
+
+
+def _buffer(p: int) -> np.ndarray:
+    """This thread's reusable ``(p, BLOCK_ROWS)`` block of Θ (fresh 1.8 MB arrays cost
+    ~450 page faults each: 0.23 s per 1e6 rows against 0.025 s of arithmetic)."""
+    buffers = getattr(_local, "buffers", None)
+    if buffers is None:
+        buffers = _local.buffers = {}
+    if p not in buffers:
+        buffers[p] = np.empty((p, BLOCK_ROWS))
+    return buffers[p]
 
 
 def _single_threaded_blas():
@@ -77,8 +102,6 @@ class BlockAccumulator:
     def _new_lanes(self) -> None:
         self._lanes = [GramStatistics(self.p, self.n) for _ in range(LANES)]
         self._blocks = 0
-        if not hasattr(self, "_buffers"):  # one Θ block per lane, reused (no page faults)
-            self._buffers = [np.empty((self.p, BLOCK_ROWS)) for _ in range(LANES)]
 
     def add(self, z: np.ndarray, y: np.ndarray) -> None:
         """Add rows ``z`` ``(k, n_variables)`` with targets ``y`` ``(k, n)``."""
@@ -90,19 +113,19 @@ class BlockAccumulator:
         for b, s in enumerate(starts):
             work[(self._blocks + b) % LANES].append(s)
         self._blocks += len(starts)
-        threads = min(self.n_threads, len(starts))
+        threads = max(1, min(self.n_threads, len(starts) // MIN_BLOCKS_PER_THREAD))
         with _single_threaded_blas():
             if threads == 1:
                 for i in range(LANES):
                     self._run(i, work[i], z, y)
             else:
                 groups = [list(range(i, LANES, threads)) for i in range(threads)]
-                with ThreadPoolExecutor(threads) as pool:
-                    list(pool.map(lambda g: [self._run(i, work[i], z, y) for i in g], groups))
+                list(_executor(threads).map(
+                    lambda g: [self._run(i, work[i], z, y) for i in g], groups))
 
     def _run(self, i: int, starts: list[int], z: np.ndarray, y: np.ndarray) -> None:
         """Add the blocks starting at rows ``starts`` to lane ``i``."""
-        lane, buffer = self._lanes[i], self._buffers[i]
+        lane, buffer = self._lanes[i], _buffer(self.p)
         for s in starts:
             zb = z[s:s + BLOCK_ROWS]
             theta = self.transform(zb, out=buffer[:, :zb.shape[0]].T)
