@@ -112,18 +112,20 @@ def _predict(coef: np.ndarray, features: np.ndarray) -> np.ndarray:
 
 
 def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 4,
-                 holdout: float = 0.2, tolerance: float = 0.1, block: int | None = None
+                 holdout: float = 0.0, tolerance: float = 0.02, block: int | None = None
                  ) -> tuple[tuple[int, ...], list]:
-    """Best non-negative subset of at most ``max_terms`` columns, chosen by forecasting.
+    """Best non-negative subset of at most ``max_terms`` columns (exhaustive search).
 
-    Every subset is fitted on the first ``1 - holdout`` of the samples and scored by the
-    largest error with which it continues over the last ``holdout`` part, relative to that
-    part's own ``dH`` range, which is exactly the task a validation window poses. The
-    smallest subset within ``(1 + tolerance)`` of the best score wins (parsimony); ties go to
-    the lower score. ``holdout=0`` scores the training RMS error instead. ``block`` chooses
-    the fit (see ``_nonnegative_fit``).
+    Score of a subset: with ``holdout = 0`` the RMS training error (J); with ``holdout = h``
+    the subset is fitted on the first ``1 - h`` of the samples and scored by the largest error
+    with which it continues over the last ``h``, relative to that part's own ``dH`` range
+    (the task a later validation window poses). Subsets in which a coefficient hits the
+    bound 0 duplicate a smaller subset and are skipped. The size grows from 1 while the best
+    score of the next size is lower by more than the fraction ``tolerance`` (an elbow rule:
+    the cumulative features are strongly correlated, so noise alone lowers the error a little
+    with every term). ``block`` chooses the fit (see ``_nonnegative_fit``).
 
-    Returns ``(support, candidates)`` with ``candidates`` a list of ``(score, subset)``.
+    Returns ``(support, candidates)`` with ``candidates`` the sorted ``(score, subset)`` list.
     """
     m, p = features.shape
     if not 1 <= max_terms <= p:
@@ -136,17 +138,26 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
         for subset in combinations(range(p), k):
             cols = features[:, subset]
             coef = _nonnegative_fit(cols[:cut], delta_h[:cut], block)
+            if np.any(coef[1:] == 0):
+                continue
             error = delta_h - _predict(coef, cols)
             if holdout > 0:
                 score = np.max(np.abs(error[cut:])) / max(np.ptp(delta_h[cut:]), 1e-300)
             else:
                 score = np.sqrt(np.mean(error ** 2))
-            if np.any(coef[1:] == 0):   # a subset with a dropped term duplicates a smaller one
-                score = np.inf
             candidates.append((float(score), subset))
-    best = min(s for s, _ in candidates)
-    fine = [(len(sub), s, sub) for s, sub in candidates if s <= best * (1 + tolerance)]
-    return min(fine)[2], sorted(candidates)
+    candidates.sort()
+    best = {}
+    for score, subset in candidates:
+        best.setdefault(len(subset), (score, subset))
+    sizes = sorted(best)
+    chosen = sizes[0]
+    for k in sizes[1:]:
+        if best[k][0] < best[chosen][0] * (1 - tolerance):
+            chosen = k
+        else:
+            break
+    return best[chosen][1], candidates
 
 
 @dataclass(frozen=True)

@@ -28,16 +28,17 @@ class EnergyDiscrepancy:
             (default :func:`default_friction_library`).
         max_terms, holdout, tolerance: term selection of the dissipation form
             (:func:`~discrepancy.energy.dissipation.select_terms`).
-        block_seconds: fit the energy lost per block of this length (s) with relative weights
-            (default 2 s), or ``None`` for a least-squares fit of the cumulative curve.
+        block_seconds: ``None`` (default): least squares on the cumulative curve; a length
+            (s): fit the energy lost per block of that length with relative weights, so the
+            low-energy end of a decaying swing counts as much as its start.
         differentiation_method: turns measured positions into ``(q_smooth, dq)``
             (default Savitzky-Golay, window 31, cubic).
         position_names, velocity_names: names of ``q`` and ``dq`` (library variables).
     """
 
     def __init__(self, energy=None, *, form: str = "dissipation", feature_library=None,
-                 optimizer=None, friction_terms=None, max_terms: int = 4, holdout: float = 0.2,
-                 tolerance: float = 0.1, block_seconds: float | None = 2.0,
+                 optimizer=None, friction_terms=None, max_terms: int = 4, holdout: float = 0.0,
+                 tolerance: float = 0.02, block_seconds: float | None = None,
                  differentiation_method=None,
                  position_names=("phi1", "phi2"), velocity_names=("dphi1", "dphi2")):
         self.energy = energy
@@ -55,7 +56,12 @@ class EnergyDiscrepancy:
 
     # -- data -------------------------------------------------------------------------------
     def states(self, q, t, *, dq=None) -> tuple[np.ndarray, np.ndarray]:
-        """``(x, t)``: ``x = [q_smooth, dq]`` ``(m, 2k)`` from positions ``q`` ``(m, k)`` (rad)."""
+        """``(x, t)``: ``x = [q_smooth, dq]`` ``(m', 2k)`` from positions ``q`` ``(m, k)`` (rad).
+
+        When ``dq`` is not given it is estimated with ``differentiation_method`` and the
+        samples within the method's half window (``halo``) of either end are dropped: there
+        the derivative is a one-sided extrapolation, and its error in ``H_m`` would set ``E0``.
+        """
         k = len(self.position_names)
         q = as_2d("q", q, n_cols=k, allow_1d=k == 1)
         t = as_times("t", t, q.shape[0])
@@ -65,7 +71,9 @@ class EnergyDiscrepancy:
         method = SavitzkyGolay(window_length=31, polyorder=3) if method is None \
             else get_differentiation_method(method)
         q_smooth, dq = method(q, t)
-        return np.hstack([q_smooth, dq]), t
+        h = method.halo or 0
+        keep = slice(h, q.shape[0] - h)
+        return np.hstack([q_smooth, dq])[keep], t[keep]
 
     def _energy(self, x) -> np.ndarray:
         if not callable(self.energy):

@@ -1,0 +1,92 @@
+"""Figures of the energy discrepancy (like the paper's Figs. 4 and 5) and of friction laws."""
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ..symbolic import compile_numpy
+
+
+def energy_figure(t, e0, h_m, delta_h, *, split: float | None = None, title: str = ""):
+    """Left: ``E0`` and ``H_m(t)`` (J); right: ``dH = E0 - H_m`` (J) (paper Fig. 4a)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.4))
+    axes[0].plot(t, np.full_like(t, e0), "k--", lw=1, label="E0")
+    axes[0].plot(t, h_m, color="tab:blue", lw=0.7, label="H_m = T + V")
+    axes[1].plot(t, delta_h, color="tab:red", lw=0.8, label="dH = E0 - H_m")
+    for ax, ylabel in zip(axes, ("energy (J)", "dissipated energy (J)"), strict=True):
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel(ylabel)
+        if split is not None:
+            ax.axvline(split, color="0.5", ls=":", lw=1, label="validation starts")
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def fit_figure(panels, *, title: str = ""):
+    """One column per panel: ``dH`` and the model (top), percentage error (bottom).
+
+    Args:
+        panels: list of dicts with ``t``, ``delta_h``, ``model`` (J), ``error`` (%),
+            ``label`` (e.g. "training") and ``error_label`` (the normaliser).
+    """
+    fig, axes = plt.subplots(2, len(panels), figsize=(5.5 * len(panels), 5.6), squeeze=False)
+    for j, p in enumerate(panels):
+        axes[0, j].plot(p["t"], p["delta_h"], color="0.4", lw=1.6, label="dH (measured)")
+        axes[0, j].plot(p["t"], p["model"], color="tab:blue", lw=1, ls="--", label="model")
+        axes[0, j].set_title(p["label"])
+        axes[0, j].set_ylabel("dH (J)")
+        axes[0, j].legend(fontsize=8)
+        axes[1, j].plot(p["t"], p["error"], color="tab:red", lw=0.7)
+        axes[1, j].set_ylabel(p.get("error_label", "error (%)"))
+        axes[1, j].set_xlabel("t (s)")
+        axes[1, j].axhline(0, color="k", lw=0.5)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def friction_law_figure(laws, *, speed_max: float = 10.0, title: str = ""):
+    """Friction torque against joint speed for each law, joint 1 and joint 2.
+
+    Args:
+        laws: dict label -> list of ``(FrictionTerm, coefficient)``; the torque of a term is its
+            power divided by the joint speed, evaluated with the other speed at rest.
+    """
+    w = np.linspace(-speed_max, speed_max, 801)
+    w = w[w != 0]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.6))
+    for j, (ax, name) in enumerate(zip(axes, ("joint 1 (dphi1, dphi2 = 0)",
+                                              "joint 2 (dphi1 = 0, dphi2 = -w)"), strict=True)):
+        v = np.zeros((len(w), 2))
+        v[:, 0] = w if j == 0 else 0.0
+        v[:, 1] = 0.0 if j == 0 else -w   # joint 2 turns at dphi1 - dphi2 = w
+        for label, terms in laws.items():
+            power = sum((c * compile_numpy(term.power, ["dphi1", "dphi2"])(v)
+                         for term, c in terms), np.zeros(len(w)))
+            ax.plot(w, power / w, lw=1.2, label=label)
+        ax.set_xlabel("joint speed w (rad/s)")
+        ax.set_ylabel("friction torque (N m)")
+        ax.set_title(name)
+        ax.axhline(0, color="k", lw=0.5)
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def seeds_figure(seeds, k1_error, k2_error, val_error, *, title: str = ""):
+    """Per seed: relative errors of k1, k2 (%) and validation error (% of max|dH|)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.4))
+    x = np.arange(len(seeds))
+    axes[0].bar(x - 0.2, k1_error, 0.4, label="k1 error (%)")
+    axes[0].bar(x + 0.2, k2_error, 0.4, label="k2 error (%)")
+    axes[1].bar(x, val_error, 0.6, color="tab:red", label="validation max error (% of max|dH|)")
+    for ax in axes:
+        ax.set_xticks(x, [str(s) for s in seeds])
+        ax.set_xlabel("seed")
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
