@@ -125,7 +125,8 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     the cumulative features are strongly correlated, so noise alone lowers the error a little
     with every term). ``block`` chooses the fit (see ``_nonnegative_fit``).
 
-    Returns ``(support, candidates)`` with ``candidates`` the sorted ``(score, subset)`` list.
+    Returns ``(support, candidates)`` with ``candidates`` the sorted ``(score, subset)`` list;
+    ``support`` is empty when no law fits with positive coefficients (no dissipation seen).
     """
     m, p = features.shape
     if not 1 <= max_terms <= p:
@@ -150,10 +151,14 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     best = {}
     for score, subset in candidates:
         best.setdefault(len(subset), (score, subset))
+    if not best:    # every law needs a negative coefficient: the data show no dissipation
+        return (), candidates
+    # errors below ~1e-5 of dH's spread are the trapezoid rule's, not information
+    floor = 1e-5 if holdout > 0 else 1e-5 * float(np.std(delta_h))
     sizes = sorted(best)
     chosen = sizes[0]
     for k in sizes[1:]:
-        if best[k][0] < best[chosen][0] * (1 - tolerance):
+        if best[chosen][0] > floor and best[k][0] < best[chosen][0] * (1 - tolerance):
             chosen = k
         else:
             break
@@ -174,7 +179,10 @@ def fit_dissipation(features: np.ndarray, delta_h: np.ndarray, terms,
                     **selection) -> DissipationFit:
     """Select terms (:func:`select_terms`) and refit them on all samples."""
     support, candidates = select_terms(features, delta_h, **selection)
-    coef = _nonnegative_fit(features[:, support], delta_h, selection.get("block"))
+    if support:
+        coef = _nonnegative_fit(features[:, support], delta_h, selection.get("block"))
+    else:
+        coef = np.array([np.mean(delta_h)])
     named = [(s, [terms[i].name for i in sub]) for s, sub in candidates]
     return DissipationFit(terms=tuple(terms[i] for i in support), coefficients=coef[1:],
                           offset=float(coef[0]), candidates=named)

@@ -1,0 +1,139 @@
+"""EnergyDiscrepancy: dissipation form recovers known friction laws; paper's form is a tautology."""
+import warnings
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import discrepancy as dc
+from discrepancy.energy import (
+    EnergyDiscrepancy,
+    EnergyTautologyWarning,
+    default_friction_library,
+    energy_span_residual,
+    fit_dissipation,
+    integrated_powers,
+    percent_error,
+)
+from discrepancy.errors import NotFittedError, ParameterError, ShapeError, UnknownNameError
+from discrepancy.symbolic import symbol
+from discrepancy.systems import DoublePendulum, DoublePendulumParameters
+
+
+@pytest.fixture(scope="module")
+def swings():
+    """Two exact swings (5 s, 1 kHz) of the Table-1 pendulum from different energies."""
+    pend = DoublePendulum()
+    t = np.arange(5001) / 1000
+    return pend, t, [pend.simulate(x0, t) for x0 in ([2.0, 4.0, 0, 0], [1.8, 2.5, 0, 0])]
+
+
+def test_percent_error_by_hand():
+    dh = np.array([0.0, 1.0, 2.0, 4.0])
+    model = np.array([0.0, 1.5, 2.0, 3.0])
+    np.testing.assert_allclose(percent_error(dh, model), [0, -12.5, 0, 25])
+    np.testing.assert_allclose(percent_error(dh + 10, model + 10, normaliser="range"),
+                               [0, -12.5, 0, 25])
+
+
+def test_integrated_powers_of_constant_speeds():
+    terms = default_friction_library()
+    t = np.linspace(0, 2, 201)
+    v = np.tile([3.0, 1.0], (201, 1))     # joint 1 at 3 rad/s, joint 2 at 2 rad/s
+    integral = integrated_powers(terms, v, t)[-1]
+    expected = [9 * 2, 4 * 2, 3 * 2, 2 * 2, 27 * 2, 1 * 2,
+                3 * np.exp(-900) * 2, 2 * np.exp(-400) * 2]
+    np.testing.assert_allclose(integral, expected, rtol=1e-12, atol=1e-300)
+
+
+def test_dissipation_fit_recovers_viscous_and_coulomb_laws():
+    """Velocities of a decaying two-frequency swing; dH built from known friction laws."""
+    t = np.arange(30001) / 1000
+    decay = np.exp(-t / 15)
+    v = np.column_stack([5 * decay * np.sin(4.1 * t), 7 * decay * np.sin(6.3 * t + 1)])
+    terms = default_friction_library()
+    features = integrated_powers(terms, v, t)
+    truth = {"viscous joint 1": 7e-4, "Coulomb joint 2": 3e-4}
+    index = {term.name: i for i, term in enumerate(terms)}
+    delta_h = sum(c * features[:, index[n]] for n, c in truth.items()) + 2e-3
+    fit = fit_dissipation(features, delta_h, terms)
+    found = {term.name: c for term, c in zip(fit.terms, fit.coefficients, strict=True)}
+    assert set(found) == set(truth)
+    for name, value in truth.items():
+        assert found[name] == pytest.approx(value, rel=1e-6)
+    assert fit.offset == pytest.approx(2e-3, rel=1e-6)
+
+
+def test_learned_dissipation_is_never_negative():
+    """Energy that grows (pumping) cannot be explained by passive friction: all xi >= 0."""
+    t = np.arange(5001) / 1000
+    v = np.column_stack([np.sin(3 * t), np.cos(2 * t)])
+    terms = default_friction_library()
+    features = integrated_powers(terms, v, t)
+    fit = fit_dissipation(features, -1e-3 * features[:, 0] - 5e-4 * features[:, 2], terms)
+    assert np.all(fit.coefficients >= 0)
+
+
+def test_energy_discrepancy_recovers_k1_k2_from_exact_states(swings):
+    pend, t, (x, _) = swings
+    model = EnergyDiscrepancy(pend.energy).fit(x[:, :2], t, dq=x[:, 2:])
+    found = {term.name: c for term, c in zip(model.terms_, model.coef_, strict=True)}
+    p = DoublePendulumParameters()
+    assert set(found) == {"viscous joint 1", "viscous joint 2"}
+    assert found["viscous joint 1"] == pytest.approx(p.k1, rel=1e-4)
+    assert found["viscous joint 2"] == pytest.approx(p.k2, rel=1e-4)
+    assert "N m s" in model.equation()
+    score = model.score(x[:, :2], t, dq=x[:, 2:], start=model.offset_)
+    assert score["max_abs_percent_of_max"] < 0.01
+
+
+def _libraries():
+    phi1, phi2, d1, d2 = (symbol(n) for n in ("phi1", "phi2", "dphi1", "dphi2"))
+    paper = dc.PolynomialLibrary(degree=3) + dc.FourierLibrary(n_frequencies=1)
+    spans = paper + dc.CustomLibrary(expressions=[sp.cos(phi1 - phi2) * d1 * d2])
+    return paper, spans
+
+
+def test_state_form_spanning_library_is_a_tautology(swings):
+    """Spanning H_m: exact on training, wrong by E0 - E0' on a swing from another energy."""
+    pend, t, (x, x_other) = swings
+    _, spans = _libraries()
+    model = EnergyDiscrepancy(pend.energy, form="state", feature_library=spans,
+                              optimizer=dc.STLSQ(threshold=1e-5, alpha=0.0))
+    with pytest.warns(EnergyTautologyWarning, match="spans the model energy"):
+        model.fit(x[:, :2], t, dq=x[:, 2:])
+    assert model.span_residual_ < 1e-8
+    train = model.score(x[:, :2], t, dq=x[:, 2:])
+    assert train["max_abs_percent_of_max"] < 1e-3
+    other = model.predict(x_other[:, :2], t, dq=x_other[:, 2:])
+    truth = model.measured_delta_h(x_other)
+    e0_gap = pend.energy(x[:1])[0] - pend.energy(x_other[:1])[0]
+    np.testing.assert_allclose(other - truth, e0_gap, atol=1e-6 * abs(e0_gap) + 1e-9)
+
+
+def test_state_form_without_span_does_not_warn(swings):
+    pend, t, (x, _) = swings
+    paper, _ = _libraries()
+    theta = paper.fit(["phi1", "phi2", "dphi1", "dphi2"]).transform(x)
+    assert energy_span_residual(theta, pend.energy(x)) > 1e-3
+    model = EnergyDiscrepancy(pend.energy, form="state", feature_library=paper,
+                              optimizer=dc.STLSQ(threshold=1e-5, alpha=0.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EnergyTautologyWarning)
+        model.fit(x[:, :2], t, dq=x[:, 2:])
+
+
+def test_bad_use_raises_clear_errors(swings):
+    pend, t, (x, _) = swings
+    with pytest.raises(NotFittedError):
+        EnergyDiscrepancy(pend.energy).predict(x[:, :2], t, dq=x[:, 2:])
+    with pytest.raises(UnknownNameError, match="form"):
+        EnergyDiscrepancy(pend.energy, form="hamilton").fit(x[:, :2], t, dq=x[:, 2:])
+    with pytest.raises(ParameterError, match="feature_library"):
+        EnergyDiscrepancy(pend.energy, form="state").fit(x[:, :2], t, dq=x[:, 2:])
+    with pytest.raises(ShapeError, match="energy"):
+        EnergyDiscrepancy(lambda z: np.zeros(3)).fit(x[:, :2], t, dq=x[:, 2:])
+    with pytest.raises(ShapeError, match="q"):
+        EnergyDiscrepancy(pend.energy).fit(x[:, :3], t)
+    with pytest.raises(ParameterError, match="max_terms"):
+        EnergyDiscrepancy(pend.energy, max_terms=20).fit(x[:, :2], t, dq=x[:, 2:])
