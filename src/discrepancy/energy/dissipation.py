@@ -14,6 +14,7 @@ from itertools import combinations
 import numpy as np
 import sympy as sp
 from scipy.integrate import cumulative_trapezoid
+from scipy.ndimage import uniform_filter1d
 from scipy.optimize import lsq_linear, nnls
 
 from ..errors import ParameterError
@@ -116,7 +117,9 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
                  ) -> tuple[tuple[int, ...], list]:
     """Best non-negative subset of at most ``max_terms`` columns (exhaustive search).
 
-    Score of a subset: with ``holdout = 0`` the RMS training error (J); with ``holdout = h``
+    Score of a subset: with ``holdout = 0`` the RMS training error (J) after a moving average
+    over 1 % of the samples (the cumulative model is smooth; the pointwise noise of ``H_m``
+    from differentiated angles would otherwise hide what a term adds); with ``holdout = h``
     the subset is fitted on the first ``1 - h`` of the samples and scored by the largest error
     with which it continues over the last ``h``, relative to that part's own ``dH`` range
     (the task a later validation window poses). Subsets in which a coefficient hits the
@@ -134,6 +137,7 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     if not 0 <= holdout < 0.9:
         raise ParameterError(f"holdout must be a fraction in [0, 0.9); got {holdout}")
     cut = int(round(m * (1 - holdout)))
+    smooth = max(1, m // 100)
     candidates = []
     for k in range(1, max_terms + 1):
         for subset in combinations(range(p), k):
@@ -145,7 +149,7 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
             if holdout > 0:
                 score = np.max(np.abs(error[cut:])) / max(np.ptp(delta_h[cut:]), 1e-300)
             else:
-                score = np.sqrt(np.mean(error ** 2))
+                score = np.sqrt(np.mean(uniform_filter1d(error, smooth) ** 2))
             candidates.append((float(score), subset))
     candidates.sort()
     best = {}
