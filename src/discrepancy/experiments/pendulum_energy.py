@@ -158,6 +158,15 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
         title="Friction law"), "friction_law.png", "Learned and true friction torque")
     rep.figure(seeds_figure(seeds, k1e, k2e, vale), "seeds.png", "Per-seed errors")
     _state_form_text(rep, per_seed[0]["state_form"])
+    rep.results["state_form_median_over_seeds"] = {
+        name: {f"{part}_max_abs_percent_of_max": float(np.median(
+            [e["state_form"][name][part]["max_abs_percent_of_max"]
+             for e in per_seed if "state_form" in e])) for part in ("training", "validation")}
+        for name in per_seed[0]["state_form"]}
+    rep.text("State form, median over seeds (max error, % of max|dH|): " + "; ".join(
+        f"{n}: training {v['training_max_abs_percent_of_max']:.3g} %, validation "
+        f"{v['validation_max_abs_percent_of_max']:.3g} %"
+        for n, v in rep.results["state_form_median_over_seeds"].items()))
     return rep.write()
 
 
@@ -194,6 +203,7 @@ def _state_form_text(rep, results):
                r["training"]["max_abs_percent_of_max"]]
         row += [r[k]["max_abs_percent_of_max"] for k in r if k.startswith("validation")]
         rows.append(row)
+    rep.text("Seed 0 (synthetic) or the recording (measured):")
     rep.table(["library", "span residual", "warned", "terms", "train %max", "val %max"], rows)
     rep.results["state_form"] = results
 

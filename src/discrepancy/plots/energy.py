@@ -62,10 +62,16 @@ def friction_law_figure(laws, *, speed_max: float = 10.0, title: str = ""):
         v = np.zeros((len(w), 2))
         v[:, 0] = w if j == 0 else 0.0
         v[:, 1] = 0.0 if j == 0 else -w   # joint 2 turns at dphi1 - dphi2 = w
+        shown = []
         for label, terms in laws.items():
             power = sum((c * compile_numpy(term.power, ["dphi1", "dphi2"])(v)
                          for term, c in terms), np.zeros(len(w)))
             ax.plot(w, power / w, lw=1.2, label=label)
+            shown.append(power / w)
+        # a narrow Stribeck peak near w = 0 would flatten everything else: clip to the bulk
+        bulk = np.percentile(np.abs(np.concatenate(shown)), 95)
+        if bulk > 0:
+            ax.set_ylim(-1.4 * bulk, 1.4 * bulk)
         ax.set_xlabel("joint speed w (rad/s)")
         ax.set_ylabel("friction torque (N m)")
         ax.set_title(name)

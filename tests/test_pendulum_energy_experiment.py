@@ -1,0 +1,73 @@
+"""End-to-end: `discrepancy reproduce pendulum-energy[-experiment]` (quick versions)."""
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from discrepancy.errors import DataError
+from discrepancy.experiments import pendulum_energy as pe
+
+
+def test_encoder_quantisation():
+    step = 2 * np.pi / 5000
+    x = np.array([[0.3 * step + 1.0, 1.0 + 2.6 * step, 0, 0]])
+    q = pe.encoder_angles(x)
+    assert np.all(np.abs(q[0, 0] - x[0, 0]) <= step / 2)
+    # phi2 is read through the relative encoder: phi1 reading + quantised (phi2 - phi1)
+    assert q[0, 1] - q[0, 0] == pytest.approx(round((x[0, 1] - x[0, 0]) / step) * step)
+
+
+def test_data_folder_from_environment(tmp_path, monkeypatch):
+    try:
+        real = pe.data_folder()
+    except DataError as e:
+        pytest.skip(f"measured double pendulum data not available: {e}")
+    target = tmp_path / "double_pendulum"
+    target.mkdir()
+    for name in (pe.RECORDING, pe.PARAMETERS):
+        shutil.copy(real / name, target / name)
+    monkeypatch.setenv("DISCREPANCY_DATA", str(tmp_path))
+    assert pe.data_folder() == target
+
+
+@pytest.mark.slow
+def test_synthetic_quick(tmp_path):
+    out = pe.run_synthetic(tmp_path, quick=True)
+    results = json.loads((out / "results.json").read_text())
+    truth = results["true_parameters"]
+    assert truth["k1"] == 7.24e-4 and truth["k2"] == 1.65e-4          # paper's Table 1
+    for seed in results["per_seed"]:
+        names = {t["name"] for t in seed["identified_terms"]}
+        assert names == {"viscous joint 1", "viscous joint 2"}
+        assert abs(seed["k1"] / truth["k1"] - 1) < 0.02
+        assert abs(seed["k2"] / truth["k2"] - 1) < 0.10
+        assert all(t["coefficient"] > 0 for t in seed["identified_terms"])
+    state = results["per_seed"][0]["state_form"]
+    spans = state["paper library + cos(phi1-phi2) dphi1 dphi2 (spans H_m)"]
+    paper = state["paper library (does not span H_m)"]
+    assert spans["tautology_warning"] and not paper["tautology_warning"]
+    # the tautology: near-exact in training, off by the initial-energy gap on a new swing
+    assert spans["training"]["max_abs_percent_of_max"] < 0.1
+    assert spans["validation"]["max_abs_percent_of_max"] > 20
+    for name in ("fit.png", "energy_training.png", "friction_law.png", "report.md"):
+        assert (out / name).is_file()
+
+
+@pytest.mark.slow
+def test_measured_swing(tmp_path):
+    try:
+        pe.data_folder()
+    except DataError as e:
+        pytest.skip(f"measured double pendulum data not available: {e}")
+    out = pe.run_experiment(tmp_path)
+    results = json.loads((out / "results.json").read_text())
+    assert results["split_time_s"] == pytest.approx(69.342, abs=0.05)
+    main = results["dissipation_form"][next(iter(results["dissipation_form"]))]
+    assert 1 <= len(main["identified_terms"]) <= 4
+    assert all(t["coefficient"] > 0 for t in main["identified_terms"])
+    assert main["training"]["max_abs_percent_of_max"] <= 3.0
+    for key in ("validation_continued", "validation_restarted_at_window_start"):
+        assert np.isfinite(main[key]["max_abs_percent_of_range"])
+    spans = results["state_form"]["paper library + cos(phi1-phi2) dphi1 dphi2 (spans H_m)"]
+    assert spans["tautology_warning"]
