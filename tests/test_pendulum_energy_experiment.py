@@ -7,6 +7,7 @@ import pytest
 
 from discrepancy.errors import DataError
 from discrepancy.experiments import pendulum_energy as pe
+from discrepancy.experiments import pendulum_energy_measured as pm
 
 
 def test_encoder_quantisation():
@@ -20,15 +21,15 @@ def test_encoder_quantisation():
 
 def test_data_folder_from_environment(tmp_path, monkeypatch):
     try:
-        real = pe.data_folder()
+        real = pm.data_folder()
     except DataError as e:
         pytest.skip(f"measured double pendulum data not available: {e}")
     target = tmp_path / "double_pendulum"
     target.mkdir()
-    for name in (pe.RECORDING, pe.PARAMETERS):
+    for name in (pm.RECORDING, pm.PARAMETERS):
         shutil.copy(real / name, target / name)
     monkeypatch.setenv("DISCREPANCY_DATA", str(tmp_path))
-    assert pe.data_folder() == target
+    assert pm.data_folder() == target
 
 
 @pytest.mark.slow
@@ -57,7 +58,7 @@ def test_synthetic_quick(tmp_path):
 @pytest.mark.slow
 def test_measured_swing(tmp_path):
     try:
-        pe.data_folder()
+        pm.data_folder()
     except DataError as e:
         pytest.skip(f"measured double pendulum data not available: {e}")
     out = pe.run_experiment(tmp_path)

@@ -5,7 +5,7 @@ from scipy.io import savemat
 
 from discrepancy.data.pendulum_recording import load_pendulum_recording
 from discrepancy.errors import DataError, ModelFileError, ShapeError
-from discrepancy.experiments.pendulum_energy import RECORDING, data_folder
+from discrepancy.experiments.pendulum_energy_measured import RECORDING, data_folder
 
 
 def _cells(arrays):

@@ -7,7 +7,6 @@ that spans ``H_m`` and one that does not) and write figures, ``report.md``, ``re
 """
 from __future__ import annotations
 
-import os
 import warnings
 from pathlib import Path
 
@@ -16,9 +15,8 @@ import sympy as sp
 from tqdm import tqdm
 
 from ..differentiation import SavitzkyGolay
-from ..energy import EnergyDiscrepancy, EnergyTautologyWarning, error_summary, percent_error
+from ..energy import EnergyDiscrepancy, EnergyTautologyWarning, percent_error
 from ..energy.dissipation import default_friction_library
-from ..errors import DataError
 from ..symbolic import symbol
 from ..systems.double_pendulum import DoublePendulum, DoublePendulumParameters
 from .report import Report
@@ -26,8 +24,6 @@ from .report import Report
 RATE = 1000.0            # Hz
 DURATION = 20.0          # s
 ENCODER_COUNTS = 5000    # per revolution
-RECORDING = "DoublePendulumDataForParameterEstimation.mat"
-PARAMETERS = "EstimatedParameters_DoublePendulum.mat"
 # A wide, high-order window: at 5000 counts/rev the quantisation noise of the derivative,
 # times speeds of up to ~16 rad/s, dominates the error of H_m (checked against the true states).
 SMOOTHING = {"window_length": 71, "polyorder": 6}
@@ -208,126 +204,8 @@ def _state_form_text(rep, results):
     rep.results["state_form"] = results
 
 
-def data_folder() -> Path:
-    """The double pendulum data: ``$DISCREPANCY_DATA/double_pendulum``, else
-    ``../shared/data/double_pendulum`` beside the repository checkout."""
-    env = os.environ.get("DISCREPANCY_DATA")
-    candidates = [Path(env) / "double_pendulum"] if env else []
-    candidates.append(Path(__file__).resolve().parents[3].parent / "shared" / "data"
-                      / "double_pendulum")
-    for folder in candidates:
-        if (folder / RECORDING).is_file() and (folder / PARAMETERS).is_file():
-            return folder
-    raise DataError(f"cannot find {RECORDING} and {PARAMETERS}; looked in "
-                    f"{[str(c) for c in candidates]}. Set DISCREPANCY_DATA to the folder that "
-                    "holds double_pendulum/")
-
-
-# Real-data settings of the dissipation form: the recording decays from a chaotic swing to
-# near rest and validation is its low-energy end, so terms are chosen by how well they
-# continue over the last 20 % of the training part, and fitted on the energy lost per 2 s
-# with relative weights (an absolute fit is dominated by the first seconds).
-REAL_SETTINGS = {"holdout": 0.2, "block_seconds": 2.0, "max_terms": 4}
-# The recording's angles are smoother than a 5000-count quantisation at 16 rad/s; a cubic
-# over 51 ms keeps the bias at the fast flips small.
-REAL_SMOOTHING = {"window_length": 51, "polyorder": 3}
-
-
-def _continued(model, x, t, split):
-    """Errors of the model integrated from t0 through the recording (training fit continued),
-    on training and validation; and restarted at the measured dH where validation begins."""
-    dh = model.measured_delta_h(x)
-    pred = model.predict_states(x, t, start=model.offset_)
-    anchored = pred[split:] - pred[split] + dh[split]
-    return dh, pred, {"training": error_summary(dh[:split], pred[:split]),
-                      "validation_continued": error_summary(dh[split:], pred[split:]),
-                      "validation_restarted_at_window_start": error_summary(dh[split:], anchored)}
-
-
-def _file_law_model(pend, x, t, split):
-    """The rig file's viscous law k1 dphi1^2 + k2 (dphi1 - dphi2)^2 with a fitted offset."""
-    dh = EnergyDiscrepancy(pend.energy).measured_delta_h(x)
-    power = pend.dissipated_power(x)
-    from scipy.integrate import cumulative_trapezoid
-    pred = cumulative_trapezoid(power, t, initial=0.0)
-    pred += np.mean(dh[:split] - pred[:split])
-    return pred, {"training": error_summary(dh[:split], pred[:split]),
-                  "validation_continued": error_summary(dh[split:], pred[split:])}
-
-
 def run_experiment(out_dir, *, quick: bool = False) -> Path:
-    """The measured free swing: fit on 0-69.3 s, validate on the rest (``quick`` is the same)."""
-    from ..data.pendulum_recording import load_pendulum_recording
-    from ..plots.energy import energy_figure, fit_figure, friction_law_figure
+    """The measured free swing (see :mod:`.pendulum_energy_measured`)."""
+    from .pendulum_energy_measured import run_experiment as run
 
-    folder = data_folder()
-    rec = load_pendulum_recording(folder / RECORDING)
-    params = DoublePendulumParameters.from_mat(folder / PARAMETERS)
-    pend = DoublePendulum(params)
-    rep = Report(out_dir, "pendulum-energy-experiment", title="Energy lost to friction: measured "
-                 "double pendulum (MultiArm-Pendulum rig, cart locked)")
-    smooth = SavitzkyGolay(**REAL_SMOOTHING)
-    split_q = rec.split_index
-    models = {
-        "dissipation form (forecast-selected, relative block fit)": EnergyDiscrepancy(
-            pend.energy, differentiation_method=smooth, **REAL_SETTINGS),
-        "dissipation form (library defaults: cumulative fit, elbow on training RMS)":
-            EnergyDiscrepancy(pend.energy, differentiation_method=smooth, max_terms=4)}
-    results, fits = {}, {}
-    for name, model in models.items():
-        model.fit(rec.angles[:split_q], rec.t[:split_q])
-        x, t = model.states(rec.angles, rec.t)
-        split = int(np.searchsorted(t, rec.split_time))
-        dh, pred, errors = _continued(model, x, t, split)
-        results[name] = {"identified_terms": model.identified_terms(),
-                         "equation": model.equation(), "offset_J": model.offset_, **errors}
-        fits[name] = (model, dh, pred)
-    file_pred, file_errors = _file_law_model(pend, x, t, split)
-    results["rig file's viscous law (k1, k2 from the parameter file)"] = {
-        "k1_N_m_s": params.k1, "k2_N_m_s": params.k2, **file_errors}
-    rep.results.update({"parameters": params.as_dict(), "split_time_s": rec.split_time,
-                        "duration_s": float(rec.t[-1]), "smoothing": REAL_SMOOTHING,
-                        "settings": REAL_SETTINGS, "dissipation_form": results})
-    rep.results["state_form"] = _state_form(
-        pend.energy, rec.angles[:split_q], rec.t[:split_q],
-        {"validation (continued recording, same E0)": (rec.angles, rec.t)}, REAL_SMOOTHING)
-    _experiment_report(rep, results, fits, pend, x, t, split, file_pred,
-                       energy_figure, fit_figure, friction_law_figure)
-    return rep.write()
-
-
-def _experiment_report(rep, results, fits, pend, x, t, split, file_pred,
-                       energy_figure, fit_figure, friction_law_figure):
-    rows = [[name, r.get("equation", "k1 dphi1^2 + k2 (dphi1-dphi2)^2"),
-             r["training"]["max_abs_percent_of_max"],
-             r["validation_continued"]["max_abs_percent_of_max"],
-             r["validation_continued"]["max_abs_percent_of_range"],
-             r.get("validation_restarted_at_window_start", {}).get("max_abs_percent_of_range",
-                                                                  float("nan"))]
-            for name, r in results.items()]
-    rep.text(f"80 s at 1 kHz; training 0-{rep.results['split_time_s']:.3f} s, validation after. "
-             "Velocities from Savitzky-Golay on the raw angles. Errors: max |dH - model| in % "
-             "of max|dH| (paper) and of the validation window's own dH range. 'Continued' "
-             "integrates the model from t = 0 through the whole recording (the training fit "
-             "carries on; no validation value is used); 'restarted' anchors it at the measured "
-             "dH at the window start.")
-    rep.table(["model", "law", "train %max", "val %max", "val %range (continued)",
-               "val %range (restarted)"], rows)
-    h = pend.energy(x)
-    rep.figure(energy_figure(t, h[0], h, h[0] - h, split=t[split], title="Measured swing"),
-               "energy.png", "E0 and H_m; dH = E0 - H_m (cf. paper Fig. 4a)")
-    name = next(iter(fits))
-    model, dh, pred = fits[name]
-    panels = []
-    for label, sl in (("training", slice(0, split)), ("validation", slice(split, None))):
-        norm = "max" if label == "training" else "range"
-        panels.append({"t": t[sl], "delta_h": dh[sl], "model": pred[sl], "label": label,
-                       "error": percent_error(dh[sl], pred[sl], normaliser=norm),
-                       "error_label": f"error (% of {'max|dH|' if norm == 'max' else 'dH range'})"})
-    rep.figure(fit_figure(panels, title=model.equation()), "fit.png",
-               "dH and the dissipation model (cf. paper Figs. 4b,c and 5)")
-    laws = {n: list(zip(m.terms_, m.coef_, strict=True)) for n, (m, _, _) in fits.items()}
-    laws["rig file (viscous)"] = _file_law(pend.parameters)
-    rep.figure(friction_law_figure(laws, speed_max=10.0, title="Friction laws"),
-               "friction_law.png", "Learned friction torques and the rig file's viscous law")
-    _state_form_text(rep, rep.results["state_form"])
+    return run(out_dir, quick=quick)
