@@ -137,3 +137,14 @@ def test_bad_use_raises_clear_errors(swings):
         EnergyDiscrepancy(pend.energy).fit(x[:, :3], t)
     with pytest.raises(ParameterError, match="max_terms"):
         EnergyDiscrepancy(pend.energy, max_terms=20).fit(x[:, :2], t, dq=x[:, 2:])
+
+
+def test_smoothed_coulomb_power():
+    terms = default_friction_library(coulomb_smoothing=0.5)
+    coulomb = [t for t in terms if t.name == "Coulomb joint 1"][0]
+    t = np.linspace(0, 1, 101)
+    v = np.tile([2.0, 2.0], (101, 1))
+    value = integrated_powers([coulomb], v, t)[-1, 0]
+    assert value == pytest.approx(2.0 * np.tanh(4.0), rel=1e-12)
+    with pytest.raises(ParameterError, match="coulomb_smoothing"):
+        default_friction_library(coulomb_smoothing=0.0)
