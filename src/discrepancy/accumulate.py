@@ -124,16 +124,25 @@ class BlockAccumulator:
                     lambda g: [self._run(i, work[i], z, y) for i in g], groups))
 
     def _run(self, i: int, starts: list[int], z: np.ndarray, y: np.ndarray) -> None:
-        """Add the blocks starting at rows ``starts`` to lane ``i``."""
-        lane, buffer = self._lanes[i], _buffer(self.p)
+        """Add the blocks starting at rows ``starts`` to lane ``i``.
+
+        Each block fills rows of ``A = [Θ | y]ᵀ`` ``(p + n, k)`` and adds ``A Aᵀ``: one
+        product gives ``ΘᵀΘ``, ``Θᵀy`` and ``yᵀy`` (a separate ``Θᵀy`` with n = 3 columns
+        measured a third of the ``ΘᵀΘ`` time; the extra rows cost ~10 %).
+        """
+        p, lane = self.p, self._lanes[i]
+        buffer = _buffer(p + self.n)
         for s in starts:
             zb = z[s:s + BLOCK_ROWS]
-            theta = self.transform(zb, out=buffer[:, :zb.shape[0]].T)
-            yb = np.ascontiguousarray(y[s:s + BLOCK_ROWS].T)  # (n, rows): a faster product
-            lane.gram += theta.T @ theta
-            lane.rhs += (yb @ theta).T
-            lane.yy += np.einsum("ij,ij->i", yb, yb)
-            lane.count += theta.shape[0]
+            k = zb.shape[0]
+            self.transform(zb, out=buffer[:p, :k].T)
+            buffer[p:, :k] = y[s:s + BLOCK_ROWS].T
+            a = buffer[:, :k]
+            g = a @ a.T
+            lane.gram += g[:p, :p]
+            lane.rhs += g[:p, p:]
+            lane.yy += np.diagonal(g[p:, p:])
+            lane.count += k
 
     def finish_trajectory(self) -> None:
         """Add the lanes of the current trajectory to :attr:`total`, in lane order."""

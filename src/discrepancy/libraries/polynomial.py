@@ -52,7 +52,7 @@ class PolynomialLibrary(BaseLibrary):
         return self._fill(Zs, np.empty((len(self._monomials), Zs.shape[0]))).T
 
     def _evaluate_into(self, Zs, out):
-        if not out.T.flags.c_contiguous:
+        if out.strides[0] != out.itemsize:  # columns of out must be contiguous
             return super()._evaluate_into(Zs, out)
         self._fill(Zs, out.T)
         return out
