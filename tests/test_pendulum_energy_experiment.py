@@ -53,6 +53,10 @@ def test_synthetic_quick(tmp_path):
     assert spans["validation"]["max_abs_percent_of_max"] > 20
     for name in ("fit.png", "energy_training.png", "friction_law.png", "report.md"):
         assert (out / name).is_file()
+    # control: the same pipeline on exact angles recovers the true friction (truth known)
+    control = results["quantisation_control"]
+    assert control["k1_relative_error_percent_exact_angles"] < 0.05
+    assert control["k2_relative_error_percent_exact_angles"] < 0.05
 
 
 @pytest.mark.slow
