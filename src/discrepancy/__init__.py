@@ -19,12 +19,14 @@ from .differentiation import (
     Spline,
     TrendFiltered,
 )
+from .energy import EnergyDiscrepancy
 from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
 from .models import DiscrepancyModel, load_model
 from .optimizers import STLSQ, GramStatistics, Lasso
 
 __all__ = [
-    "CustomLibrary", "DiscrepancyModel", "FiniteDifference", "FourierLibrary", "GramStatistics",
+    "CustomLibrary", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
+    "FourierLibrary", "GramStatistics",
     "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "Spline", "TrendFiltered",
     "errors", "load_model", "systems",
 ]
