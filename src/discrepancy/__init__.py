@@ -11,7 +11,7 @@ Quick start::
 """
 __version__ = "0.1.0"
 
-from . import errors, systems
+from . import errors, io, systems
 from .differentiation import (
     FiniteDifference,
     Kalman,
@@ -28,5 +28,5 @@ __all__ = [
     "CustomLibrary", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
     "FourierLibrary", "GramStatistics",
     "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "Spline", "TrendFiltered",
-    "errors", "load_model", "systems",
+    "errors", "io", "load_model", "systems",
 ]
