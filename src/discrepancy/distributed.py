@@ -110,8 +110,6 @@ def _trajectory_graph(model, x, u, xd, step):
 
 def fit_dask(model, x, *, t=None, u=None, x_dot=None):
     """``model.fit`` on dask arrays (``x`` one array or a list, one per trajectory)."""
-    import dask
-
     xs = list(x) if isinstance(x, (list, tuple)) else [x]
     us = _per_trajectory("u", u, len(xs))
     xds = _per_trajectory("x_dot", x_dot, len(xs))
@@ -127,9 +125,30 @@ def fit_dask(model, x, *, t=None, u=None, x_dot=None):
             raise ShapeError(f"x[{k}] must have shape (m, {n}); got {describe(xk)}")
         graphs.append(_trajectory_graph(model, xk, _as_dask("u", uk, xk, r or None),
                                         _as_dask("x_dot", xdk, xk, n), step))
-    (total,) = dask.compute(sum(graphs[1:], graphs[0]))
+    (total,) = _compute(sum(graphs[1:], graphs[0]))
     p = model.feature_library_.n_features_
     return model._fit_statistics(_unpack(np.asarray(total), p, n))
+
+
+def _compute(graph):
+    """``dask.compute`` with a progress bar on terminals (Dask's own: the local
+    scheduler's ``ProgressBar``, or ``distributed.progress`` when a Client is active)."""
+    import sys
+
+    import dask
+
+    if not sys.stderr.isatty():
+        return dask.compute(graph)
+    try:
+        from distributed import default_client, progress
+        client = default_client()
+    except (ImportError, ValueError):
+        from dask.diagnostics import ProgressBar
+        with ProgressBar():
+            return dask.compute(graph)
+    future = client.compute(graph)
+    progress(future)
+    return (future.result(),)
 
 
 def _per_trajectory(name, value, k):
@@ -154,7 +173,6 @@ def fit_sources(model, sources, *, t=None):
     """Fit ``model`` on a list of :class:`~discrepancy.streaming.ChunkSource` (e.g. one
     :class:`~discrepancy.data.sources.HDF5Source` per file), one ``dask.delayed`` task
     each, summed as a tree. Returns the model."""
-    import dask
     from dask import delayed
 
     from .streaming import peek_layout
@@ -169,6 +187,6 @@ def fit_sources(model, sources, *, t=None):
     while len(parts) > 1:
         parts = [delayed(sum)(parts[i:i + SPLIT_EVERY]) for i in range(0, len(parts),
                                                                          SPLIT_EVERY)]
-    (total,) = dask.compute(parts[0])
+    (total,) = _compute(parts[0])
     p = model.feature_library_.n_features_
     return model._fit_statistics(_unpack(np.asarray(total), p, n))
