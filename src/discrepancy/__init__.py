@@ -12,6 +12,8 @@ Quick start::
 __version__ = "0.1.0"
 
 from . import errors, io, systems
+from .data.chunks import Chunk
+from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
 from .differentiation import (
     FiniteDifference,
     Kalman,
@@ -25,6 +27,7 @@ from .models import DiscrepancyModel, load_model
 from .optimizers import STLSQ, GramStatistics, Lasso
 
 __all__ = [
+    "CSVFiles", "Chunk", "HDF5Source", "NPZFiles", "ZarrSource",
     "CustomLibrary", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
     "FourierLibrary", "GramStatistics",
     "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "Spline", "TrendFiltered",

@@ -31,19 +31,17 @@ class DiscrepancyModel:
             differences); ignored when ``x_dot`` is given to :meth:`fit`.
         state_names: names of the n states (default ``x1 ... xn``).
         input_names: names of the r inputs (default ``u`` for one, ``u1 ... ur`` for more).
-        chunk_size: rows of Θ formed at a time; bounds memory to ``chunk_size × p`` floats.
     """
 
     def __init__(self, prior=None, feature_library: FeatureLibrary | None = None,
                  optimizer=None, differentiation_method=None, *, state_names=None,
-                 input_names=None, chunk_size: int = 32768):
+                 input_names=None):
         self.prior = prior
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method
         self.state_names = state_names
         self.input_names = input_names
-        self.chunk_size = chunk_size
 
     # ----------------------------------------------------------------- fitting
     def fit(self, x, t=None, u=None, x_dot=None) -> DiscrepancyModel:
