@@ -4,7 +4,7 @@ import pytest
 from scipy.io import savemat
 
 from discrepancy.data.pendulum_recording import load_pendulum_recording
-from discrepancy.errors import DataError, ModelFileError, ShapeError
+from discrepancy.errors import DataError, ShapeError
 from discrepancy.experiments.pendulum_energy_measured import RECORDING, data_folder
 
 
@@ -96,7 +96,7 @@ def test_missing_and_unreadable_files(tmp_path):
     with pytest.raises(DataError, match="does not exist"):
         load_pendulum_recording(tmp_path / "nothing.mat")
     (tmp_path / "text.mat").write_text("not a mat file")
-    with pytest.raises(ModelFileError, match="MATLAB"):
+    with pytest.raises(DataError, match="MATLAB"):
         load_pendulum_recording(tmp_path / "text.mat")
 
 

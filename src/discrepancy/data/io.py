@@ -95,13 +95,29 @@ def _from_columns(path, header, data, states, inputs, time):
     return LoadedData(x, t, u, list(states), inputs)
 
 
+def read_mat(path, *, what: str = "file") -> dict[str, np.ndarray]:
+    """Variables of a MATLAB ``.mat`` file (``scipy.io.loadmat``), without its ``__`` headers.
+
+    Raises DataError naming ``what`` when the file is missing or is not a MATLAB file.
+    """
+    from scipy.io import loadmat
+
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(f"{what} {str(path)!r} does not exist")
+    try:
+        contents = loadmat(path)
+    except Exception as e:  # scipy raises several types for non-MAT files
+        raise DataError(f"{what} {str(path)!r} is not a readable MATLAB file ({e})") from None
+    return {k: v for k, v in contents.items() if not k.startswith("__")}
+
+
 def _read_variables(path: Path, kind: str) -> dict[str, np.ndarray]:
     if kind == "npz":
         with np.load(path, allow_pickle=False) as f:
             return {k: f[k] for k in f.files}
     if kind == "mat":
-        from scipy.io import loadmat
-        return {k: v for k, v in loadmat(path).items() if not k.startswith("__")}
+        return read_mat(path)
     import h5py
     out = {}
     with h5py.File(path, "r") as f:

@@ -10,11 +10,10 @@ the angles, so they are kept only for comparison; differentiate the raw angles.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError, ModelFileError, ShapeError
+from ..errors import DataError, ShapeError
 
 # Plausibility limits for a pendulum recorded in radians.
 MAX_ABS_ANGLE = 20 * np.pi      # ten full turns from upright; degrees (~180 at rest) exceed it
@@ -75,18 +74,12 @@ def load_pendulum_recording(path, *, segments=("Y_id", "Y_vad"), times=("Time_id
         DataError: missing file or variables, inconsistent sampling, implausible angles
             (e.g. degrees instead of radians, or wrapped angles).
         ShapeError: a segment that is not ``4 x N`` or whose time cell has another length.
-        ModelFileError: the file is not a readable MATLAB file.
+        DataError: the file is missing or not a readable MATLAB file.
     """
-    from scipy.io import loadmat
+    from .io import read_mat
 
-    path = Path(path)
     where = str(path)
-    if not path.is_file():
-        raise DataError(f"recording {where!r} does not exist")
-    try:
-        contents = loadmat(path)
-    except Exception as e:  # scipy raises several types for non-MAT files
-        raise ModelFileError(f"{where!r} is not a readable MATLAB file ({e})") from None
+    contents = read_mat(path, what="recording")
     _require(contents, [*segments, dt_name], where)
     dt = np.asarray(contents[dt_name], dtype=float).ravel()
     if dt.size != 1 or not np.isfinite(dt[0]) or dt[0] <= 0:

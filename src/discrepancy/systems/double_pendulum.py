@@ -13,13 +13,12 @@ from __future__ import annotations
 
 from dataclasses import astuple, dataclass
 from functools import cache
-from pathlib import Path
 
 import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from ..errors import ConvergenceError, DataError, ModelFileError, ParameterError, ShapeError
+from ..errors import ConvergenceError, DataError, ParameterError, ShapeError
 from ..symbolic import compile_numpy, symbol
 from .base import System, check_physical_parameters
 from .mechanics import lagrange_equations
@@ -66,17 +65,11 @@ class DoublePendulumParameters:
     def from_mat(cls, path, *, variable: str = "EstimatedParameters") -> DoublePendulumParameters:
         """From a MATLAB file holding ``variable`` = ``[m1 m2 a1 a2 L1 I1 I2 k1 k2 g]``,
         e.g. ``EstimatedParameters_DoublePendulum.mat`` of the MultiArm-Pendulum rig."""
-        from scipy.io import loadmat
+        from ..data.io import read_mat
 
-        path = Path(path)
-        if not path.is_file():
-            raise DataError(f"parameter file {str(path)!r} does not exist")
-        try:
-            contents = loadmat(path)
-        except Exception as e:  # scipy raises several types for non-MAT files
-            raise ModelFileError(f"{str(path)!r} is not a readable MATLAB file ({e})") from None
+        contents = read_mat(path, what="parameter file")
         if variable not in contents:
-            found = [k for k in contents if not k.startswith("__")]
+            found = list(contents)
             raise DataError(f"{str(path)!r} has no variable {variable!r}; found {found}")
         return cls.from_array(contents[variable])
 
