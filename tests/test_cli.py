@@ -65,3 +65,26 @@ def test_library_spec_parser_builds_the_stated_library():
     for bad in ["poly", "poly(x)", "spline(2)", "poly(2) poly(3)", "poly(2,", "__import__(1)"]:
         with pytest.raises(ParameterError):
             parse_library(bad)
+
+
+def test_reproduce_all_reports_a_failing_experiment_and_runs_the_rest(tmp_path, monkeypatch,
+                                                                      capsys):
+    from discrepancy import experiments
+    from discrepancy.errors import DataError
+
+    ran = []
+
+    def fine(out, *, quick=False):
+        ran.append("fine")
+        return tmp_path
+
+    def broken(out, *, quick=False):
+        raise DataError("data folder not found")
+
+    monkeypatch.setattr(experiments, "EXPERIMENTS", {"a": None, "b": None, "c": None})
+    monkeypatch.setattr(experiments, "get_experiment",
+                        lambda name: broken if name == "b" else fine)
+    assert main(["reproduce", "all", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert ran == ["fine", "fine"] and "[b] FAILED: data folder not found" in err
+    assert "1 of 3 experiments failed: b" in err

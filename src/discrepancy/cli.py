@@ -53,15 +53,29 @@ def _times(text: str) -> np.ndarray:
     return _floats(text)
 
 
-def cmd_reproduce(args) -> None:
+def cmd_reproduce(args) -> int:
+    """Run the chosen experiments; with ``all``, one that fails does not stop the others."""
+    from .errors import DiscrepancyError
     from .experiments import EXPERIMENTS, get_experiment
 
     names = list(EXPERIMENTS) if args.name == "all" else [args.name]
+    failed = []
     for name in names:
-        run = get_experiment(name)
         print(f"[{name}] running ...", flush=True)
-        folder = run(args.out, quick=args.quick)
-        print(f"[{name}] wrote {folder}/report.md")
+        try:
+            folder = get_experiment(name)(args.out, quick=args.quick)
+        except (DiscrepancyError, FileNotFoundError) as e:
+            if len(names) == 1:
+                raise
+            print(f"[{name}] FAILED: {e}", file=sys.stderr, flush=True)
+            failed.append(name)
+            continue
+        print(f"[{name}] wrote {folder}/report.md", flush=True)
+    if failed:
+        print(f"error: {len(failed)} of {len(names)} experiments failed: {', '.join(failed)}",
+              file=sys.stderr)
+        return 2
+    return 0
 
 
 def cmd_fit(args) -> None:
@@ -168,11 +182,10 @@ def main(argv=None) -> int:
 
     args = build_parser().parse_args(argv)
     try:
-        args.func(args)
+        return args.func(args) or 0
     except (DiscrepancyError, FileNotFoundError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    return 0
 
 
 if __name__ == "__main__":
