@@ -58,16 +58,11 @@ class CustomLibrary(BaseLibrary):
         self.names_all = list(names)
         return super().fit(names)
 
-    def _transform(self, Z):
-        if self.expressions is not None:  # expressions may use any variable, not a subset
-            return np.column_stack([f(Z) for f in self._compiled])
-        return super()._transform(Z)
-
-    def _transform_into(self, Z, out):
-        if self.expressions is not None:
-            out[...] = self._transform(Z)
-            return out
-        return super()._transform_into(Z, out)
+    def _select(self, names):
+        # expressions name their own variables, so they see all of them
+        return list(range(len(names))) if self.expressions is not None else super()._select(names)
 
     def _evaluate(self, Zs):
+        if self.expressions is not None:
+            return np.column_stack([f(Zs) for f in self._compiled])
         return np.column_stack([np.asarray(f(Zs[:, j]), dtype=float) for f, j in self._funcs])
