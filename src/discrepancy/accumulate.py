@@ -147,17 +147,8 @@ class BlockAccumulator:
     def finish_trajectory(self) -> None:
         """Add the lanes of the current trajectory to :attr:`total`, in lane order."""
         for lane in self._lanes:
-            add_into(self.total, lane)
+            self.total += lane
         self._new_lanes()
-
-
-def add_into(target: GramStatistics, other: GramStatistics) -> GramStatistics:
-    """``target += other`` in place; returns ``target``."""
-    target.gram += other.gram
-    target.rhs += other.rhs
-    target.yy += other.yy
-    target.count += other.count
-    return target
 
 
 def accumulate(stats: GramStatistics, transform, z: np.ndarray, y: np.ndarray, *,

@@ -47,16 +47,22 @@ class GramStatistics:
         self.count += theta.shape[0]
         return self
 
-    def merge(self, other: GramStatistics) -> GramStatistics:
-        """Sum of two statistics (e.g. from two workers)."""
+    def __iadd__(self, other: GramStatistics) -> GramStatistics:
+        """Add ``other``'s sums into these, in place."""
         if (other.p, other.n) != (self.p, self.n):
             raise ShapeError(f"cannot merge statistics of ({other.p}, {other.n}) into "
                              f"({self.p}, {self.n})")
+        self.gram += other.gram
+        self.rhs += other.rhs
+        self.yy += other.yy
+        self.count += other.count
+        return self
+
+    def merge(self, other: GramStatistics) -> GramStatistics:
+        """Sum of two statistics (e.g. from two workers), as a new object."""
         out = GramStatistics(self.p, self.n)
-        out.gram = self.gram + other.gram
-        out.rhs = self.rhs + other.rhs
-        out.yy = self.yy + other.yy
-        out.count = self.count + other.count
+        out += self
+        out += other
         return out
 
     def residual_sum_of_squares(self, coef: np.ndarray) -> np.ndarray:
