@@ -8,7 +8,6 @@ re-implements them.
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import savgol_filter
 
 from ..errors import ParameterError
 from .base import Differentiator, register
@@ -63,6 +62,8 @@ class SavitzkyGolay(Differentiator):
         return int(self.window_length) // 2
 
     def _compute(self, x, t):
+        from scipy.signal import savgol_filter  # 1 s to import: only when used
+
         dt = (t[-1] - t[0]) / (len(t) - 1)
         kw = dict(window_length=self.window_length, polyorder=self.polyorder, axis=0, mode="interp")
         x_dot = savgol_filter(x, deriv=1, delta=dt, **kw)
