@@ -15,6 +15,7 @@ from . import errors, io, systems
 from .data.chunks import Chunk
 from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
 from .differentiation import (
+    Dequantised,
     FiniteDifference,
     Kalman,
     SavitzkyGolay,
@@ -28,7 +29,7 @@ from .optimizers import STLSQ, GramStatistics, Lasso
 
 __all__ = [
     "CSVFiles", "Chunk", "HDF5Source", "NPZFiles", "ZarrSource",
-    "CustomLibrary", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
+    "CustomLibrary", "Dequantised", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
     "FourierLibrary", "GramStatistics",
     "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "Spline", "TrendFiltered",
     "errors", "io", "load_model", "systems",

@@ -33,6 +33,12 @@ class Differentiator(ABC):
     def halo(self) -> int | None:
         return None
 
+    @property
+    def edge(self) -> int:
+        """Samples at each end whose estimate is an extrapolation (``halo``, or 0 for global
+        methods that do not say otherwise)."""
+        return self.halo or 0
+
     def __call__(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Return ``(x_smooth, x_dot)``, each ``(m, n)``, for ``x`` ``(m, n)`` at ``t`` ``(m,)``."""
         x = np.asarray(x, dtype=float)

@@ -71,7 +71,7 @@ class EnergyDiscrepancy:
         method = SavitzkyGolay(window_length=31, polyorder=3) if method is None \
             else get_differentiation_method(method)
         q_smooth, dq = method(q, t)
-        h = method.halo or 0
+        h = method.edge
         keep = slice(h, q.shape[0] - h)
         return np.hstack([q_smooth, dq])[keep], t[keep]
 
