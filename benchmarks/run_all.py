@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).parent
-BENCHES = ["bench_fit", "bench_simulate", "bench_streaming", "bench_dask"]
+BENCHES = ["bench_fit", "bench_simulate", "bench_streaming", "bench_dask", "bench_dequantise"]
 BIG = {"bench_streaming", "bench_dask"}
 
 

@@ -41,8 +41,11 @@ def test_synthetic_quick(tmp_path):
     for seed in results["per_seed"]:
         names = {t["name"] for t in seed["identified_terms"]}
         assert names == {"viscous joint 1", "viscous joint 2"}
-        assert abs(seed["k1"] / truth["k1"] - 1) < 0.02
+        assert abs(seed["k1"] / truth["k1"] - 1) < 0.01                # the bar
         assert abs(seed["k2"] / truth["k2"] - 1) < 0.10
+        # reconstructing the angles from the encoder counts helps on these seeds
+        assert seed["k1_relative_error_percent"] < \
+            seed["without_dequantisation"]["k1_relative_error_percent"]
         assert all(t["coefficient"] > 0 for t in seed["identified_terms"])
     state = results["per_seed"][0]["state_form"]
     spans = state["paper library + cos(phi1-phi2) dphi1 dphi2 (spans H_m)"]
