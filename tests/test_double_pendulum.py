@@ -106,3 +106,21 @@ def test_bad_parameters_and_states():
         DoublePendulumParameters(m2=0.0)
     with pytest.raises(ShapeError, match=r"\(m, 4\)"):
         DoublePendulum().energy(np.zeros((3, 3)))
+
+
+def test_pivot_force_is_the_momentum_change_of_the_centres_of_mass():
+    """Independent check: F = d2/dt2 (m1 r1 + m2 r2) + (m1 + m2) g e_y, by finite differences
+    of the simulated centres of mass; at rest hanging down it carries the weight."""
+    pend = DoublePendulum()
+    p = pend.parameters
+    hanging = pend.pivot_force(np.array([[np.pi, np.pi, 0.0, 0.0]]))[0]
+    np.testing.assert_allclose(hanging, [0.0, (p.m1 + p.m2) * p.g], atol=1e-12)
+    t = np.arange(0, 1.5, 1e-3)
+    x = pend.simulate(np.array([2.5, 3.9, 0.0, 0.0]), t)
+    cx = p.m1 * p.a1 * np.sin(x[:, 0]) + p.m2 * (p.L1 * np.sin(x[:, 0]) + p.a2 * np.sin(x[:, 1]))
+    cy = p.m1 * p.a1 * np.cos(x[:, 0]) + p.m2 * (p.L1 * np.cos(x[:, 0]) + p.a2 * np.cos(x[:, 1]))
+    fx, fy = (np.gradient(np.gradient(c, t), t) for c in (cx, cy))
+    force = pend.pivot_force(x, friction=True)
+    scale = np.max(np.abs(force[:, 0]))
+    assert np.max(np.abs(force[5:-5, 0] - fx[5:-5])) < 1e-3 * scale
+    assert np.max(np.abs(force[5:-5, 1] - fy[5:-5] - (p.m1 + p.m2) * p.g)) < 2e-3 * scale

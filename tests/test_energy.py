@@ -14,6 +14,7 @@ from discrepancy.energy import (
     fit_dissipation,
     integrated_powers,
     percent_error,
+    support_loss_terms,
 )
 from discrepancy.errors import NotFittedError, ParameterError, ShapeError, UnknownNameError
 from discrepancy.symbolic import symbol
@@ -148,3 +149,21 @@ def test_smoothed_coulomb_power():
     assert value == pytest.approx(2.0 * np.tanh(4.0), rel=1e-12)
     with pytest.raises(ParameterError, match="coulomb_smoothing"):
         default_friction_library(coulomb_smoothing=0.0)
+
+
+def test_support_loss_terms_integrate_the_squared_dynamic_pivot_force(swings):
+    pend, t, (x, _) = swings
+    p = pend.parameters
+    weight = (p.m1 + p.m2) * p.g
+    terms = support_loss_terms(pend.pivot_force, static_vertical=weight)
+    names = ["phi1", "phi2", "dphi1", "dphi2"]
+    got = integrated_powers(terms, x, t, names)[-1]
+    force = pend.pivot_force(x)
+    expected = [np.trapezoid(force[:, 0] ** 2, t), np.trapezoid((force[:, 1] - weight) ** 2, t)]
+    np.testing.assert_allclose(got, expected, rtol=1e-12)
+    # a fit with these terms in the library still finds the true joint friction
+    model = EnergyDiscrepancy(pend.energy, friction_terms=(*default_friction_library()[:4],
+                                                           *terms)).fit(x[:, :2], t, dq=x[:, 2:])
+    coef = {term.name: c for term, c in zip(model.terms_, model.coef_, strict=True)}
+    assert set(coef) == {"viscous joint 1", "viscous joint 2"}
+    assert coef["viscous joint 1"] == pytest.approx(p.k1, rel=1e-3)

@@ -6,6 +6,7 @@ from .dissipation import (
     fit_dissipation,
     integrated_powers,
     select_terms,
+    support_loss_terms,
 )
 from .hamiltonian import EnergyTautologyWarning, check_span, energy_span_residual
 from .metrics import error_summary, percent_error
@@ -13,4 +14,5 @@ from .model import EnergyDiscrepancy
 
 __all__ = ["DissipationFit", "EnergyDiscrepancy", "EnergyTautologyWarning", "FrictionTerm",
            "check_span", "default_friction_library", "energy_span_residual", "error_summary",
-           "fit_dissipation", "integrated_powers", "percent_error", "select_terms"]
+           "fit_dissipation", "integrated_powers", "percent_error", "select_terms",
+           "support_loss_terms"]

@@ -8,7 +8,8 @@ reference energy ``E0 = H_m(x(0))``, which comes from a single noisy sample.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from itertools import combinations
 
 import numpy as np
@@ -28,15 +29,19 @@ class FrictionTerm:
     Attributes:
         name: short label, e.g. ``"viscous joint 1"``.
         power: sympy expression of the dissipated power per unit coefficient (W / [unit]),
-            non-negative, in the velocity symbols.
+            non-negative, in the state symbols (usually the velocities only).
         unit: SI unit of the coefficient, e.g. ``"N m s"``.
-        torque: the torque law it stands for, for printing.
+        torque: the torque (or loss) law it stands for, for printing.
+        functions: numpy callables for undefined sympy functions in ``power`` (name ->
+            callable of the function's arguments, each ``(m,)``), e.g. a force computed by
+            the system model.
     """
 
     name: str
     power: sp.Expr
     unit: str
     torque: str
+    functions: Mapping[str, Callable] | None = field(default=None, compare=False)
 
 
 def default_friction_library(velocity_names=("dphi1", "dphi2"), *, stribeck_speed: float = 0.1,
@@ -76,10 +81,39 @@ def default_friction_library(velocity_names=("dphi1", "dphi2"), *, stribeck_spee
     return tuple(terms)
 
 
-def integrated_powers(terms, velocities: np.ndarray, t: np.ndarray,
-                      velocity_names=("dphi1", "dphi2")) -> np.ndarray:
-    """``int_0^t theta_j dt`` (trapezoid) for every term: ``(m, p)`` (J per unit coefficient)."""
-    columns = [compile_numpy(term.power, list(velocity_names))(velocities) for term in terms]
+def support_loss_terms(pivot_force: Callable, state_names=("phi1", "phi2", "dphi1", "dphi2"),
+                       *, static_vertical: float = 0.0) -> tuple[FrictionTerm, ...]:
+    """Energy absorbed by a rig's mount: ``c Fx^2`` and ``c (Fy - W)^2``.
+
+    ``pivot_force(x)`` ``(m, n)`` -> ``(m, 2)`` is the force (N) between pivot and pendulum,
+    e.g. :meth:`DoublePendulum.pivot_force`; ``static_vertical`` is its value at rest (the
+    weight ``W``), so that only the dynamic part counts. A mount whose motion under that
+    force is dominated by damping moves at ``F / c_m`` and dissipates ``F^2 / c_m``; the
+    coefficient ``c = 1 / c_m`` has the unit m / (N s).
+    """
+    args = [symbol(n) for n in state_names]
+
+    def component(j, offset):
+        return lambda *cols: pivot_force(np.column_stack(cols))[:, j] - offset
+
+    terms = []
+    for label, j, offset in (("horizontal", 0, 0.0), ("vertical", 1, static_vertical)):
+        name = f"F{'xy'[j]}"
+        force = sp.Function(name)(*args)
+        terms.append(FrictionTerm(f"support loss {label}", force ** 2, "m/(N s)",
+                                  f"mount moving under the pivot's {label} force {name}",
+                                  functions={name: component(j, offset)}))
+    return tuple(terms)
+
+
+def integrated_powers(terms, values: np.ndarray, t: np.ndarray,
+                      names=("dphi1", "dphi2")) -> np.ndarray:
+    """``int_0^t theta_j dt`` (trapezoid) for every term: ``(m, p)`` (J per unit coefficient).
+
+    ``values`` ``(m, len(names))`` holds the variables the terms' powers use (the joint
+    speeds, or the whole state for terms such as :func:`support_loss_terms`).
+    """
+    columns = [compile_numpy(term.power, list(names), term.functions)(values) for term in terms]
     return cumulative_trapezoid(np.column_stack(columns), t, axis=0, initial=0.0)
 
 

@@ -94,6 +94,9 @@ class EnergyDiscrepancy:
             return tuple(self.friction_terms)
         return default_friction_library(self.velocity_names)
 
+    def _state_names(self) -> list[str]:
+        return [*self.position_names, *self.velocity_names]
+
     def _theta(self, x) -> np.ndarray:
         return self.feature_library_.transform(x)
 
@@ -108,14 +111,13 @@ class EnergyDiscrepancy:
             if self.feature_library is None or self.optimizer is None:
                 raise ParameterError("form='state' needs feature_library and optimizer")
             self.feature_library_ = self.feature_library.fit(
-                [*self.position_names, *self.velocity_names])
+                self._state_names())
             theta = self._theta(x)
             self.span_residual_ = check_span(theta, self._energy(x))
             self.coef_ = np.asarray(self.optimizer.fit(theta, delta_h[:, None]).coef_).reshape(-1)
         else:
             terms = self._terms()
-            v = x[:, len(self.position_names):]
-            features = integrated_powers(terms, v, t, self.velocity_names)
+            features = integrated_powers(terms, x, t, self._state_names())
             block = None if self.block_seconds is None else \
                 max(2, int(round(self.block_seconds / np.median(np.diff(t)))))
             self.fit_ = fit_dissipation(features, delta_h, terms, max_terms=self.max_terms,
@@ -146,8 +148,7 @@ class EnergyDiscrepancy:
         self._check_fitted()
         if self.form == "state":
             return self._theta(x) @ self.coef_
-        v = x[:, len(self.position_names):]
-        return start + integrated_powers(self.terms_, v, t, self.velocity_names) @ self.coef_
+        return start + integrated_powers(self.terms_, x, t, self._state_names()) @ self.coef_
 
     def score(self, q, t, *, dq=None, start: float = 0.0) -> dict[str, float]:
         """Percentage errors (paper's ``max|dH|`` and the window's ``dH`` range) on a trajectory."""

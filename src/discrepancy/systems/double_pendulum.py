@@ -98,6 +98,25 @@ def _symbolic_model():
     return kinetic, potential, dissipation, mass, rest
 
 
+@cache
+def _symbolic_pivot_force():
+    """``[Fx, Fy]``: force of the pivot on the pendulum (N), ``y`` up, from the second time
+    derivatives of the centres of mass: ``F = m1 r1'' + m2 r2'' + (m1 + m2) g e_y``. In the
+    symbols of the state and of the angular accelerations ``ddphi1``, ``ddphi2``."""
+    phi1, phi2, dphi1, dphi2 = (symbol(n) for n in STATE_NAMES)
+    dd = [symbol("ddphi1"), symbol("ddphi2")]
+    m1, m2, a1, a2, L1, *_, g = (symbol(n) for n in PARAMETER_ORDER)
+    t = sp.Symbol("t", real=True)
+    q = [sp.Function("q1")(t), sp.Function("q2")(t)]
+    centres = [(m1, a1 * sp.sin(q[0]), a1 * sp.cos(q[0])),
+               (m2, L1 * sp.sin(q[0]) + a2 * sp.sin(q[1]), L1 * sp.cos(q[0]) + a2 * sp.cos(q[1]))]
+    to_state = {sp.diff(q[i], t, 2): dd[i] for i in range(2)}
+    to_state |= {sp.diff(q[0], t): dphi1, sp.diff(q[1], t): dphi2}
+    fx = sum(m * sp.diff(x, t, 2) for m, x, _ in centres)
+    fy = sum(m * sp.diff(y, t, 2) for m, _, y in centres) + (m1 + m2) * g
+    return [sp.expand(f.subs(to_state).subs({q[0]: phi1, q[1]: phi2})) for f in (fx, fy)]
+
+
 class DoublePendulum(System):
     """Mounted double pendulum with viscous joint friction (true system of Section IV.B).
 
@@ -181,6 +200,24 @@ class DoublePendulum(System):
         x = self._state(x)
         p = self.parameters
         return p.k1 * x[:, 2] ** 2 + p.k2 * (x[:, 2] - x[:, 3]) ** 2
+
+    def pivot_force(self, x, *, friction: bool = False) -> np.ndarray:
+        """Force of the pivot on the pendulum ``[Fx, Fy]`` (N, ``Fy`` up), shape ``(m, 2)``.
+
+        The centres of mass accelerate as the equations of motion say (conservative model
+        unless ``friction``); at rest hanging down ``Fy = (m1 + m2) g``. The mount feels the
+        opposite force: its dynamic part is what shakes the table under the rig.
+        """
+        x = self._state(x)
+        key = tuple(self._numbers().values())
+        if getattr(self, "_pivot_key", None) != key:
+            subs = self._numbers()
+            names = (*STATE_NAMES, "ddphi1", "ddphi2")
+            self._pivot_key = key
+            self._pivot = [compile_numpy(f.subs(subs), names) for f in _symbolic_pivot_force()]
+        rhs = self.rhs if friction else self.flawed_model()
+        z = np.hstack([x, rhs(x)[:, 2:]])
+        return np.column_stack([f(z) for f in self._pivot])
 
     def rhs(self, x, u=None) -> np.ndarray:
         """True dynamics ``dx/dt`` ``(m, 4)`` for ``x`` ``(m, 4)``; ``u`` is ignored (no input)."""
