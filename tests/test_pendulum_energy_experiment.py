@@ -71,11 +71,24 @@ def test_measured_swing(tmp_path):
     out = pe.run_experiment(tmp_path)
     results = json.loads((out / "results.json").read_text())
     assert results["split_time_s"] == pytest.approx(69.342, abs=0.05)
-    main = results["dissipation_form"][next(iter(results["dissipation_form"]))]
+    main = results["dissipation_form"]
     assert 1 <= len(main["identified_terms"]) <= 4
     assert all(t["coefficient"] > 0 for t in main["identified_terms"])
     assert main["training"]["max_abs_percent_of_max"] <= 3.0
     for key in ("validation_continued", "validation_restarted_at_window_start"):
         assert np.isfinite(main[key]["max_abs_percent_of_range"])
+    # the procedure is chosen by forecasts inside the training part only
+    table = results["procedures"]
+    chosen = results["chosen_procedure"]
+    assert all(origin + results["forecast_horizon_s"] <= results["split_time_s"] + 1e-6
+               for origin in results["forecast_origins_s"])
+    assert table[chosen]["forecast_median_percent_of_range"] == \
+        min(r["forecast_median_percent_of_range"] for r in table.values())
+    assert table[chosen]["validation_continued_percent_of_range"] == \
+        pytest.approx(main["validation_continued"]["max_abs_percent_of_range"])
+    # the learned law beats the rig file's viscous law on the continued recording
+    rig = results["rig_file_viscous_law"]
+    assert main["validation_continued"]["max_abs_percent_of_range"] < \
+        rig["validation_continued"]["max_abs_percent_of_range"] / 10
     spans = results["state_form"]["paper library + cos(phi1-phi2) dphi1 dphi2 (spans H_m)"]
     assert spans["tautology_warning"]

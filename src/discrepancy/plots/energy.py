@@ -52,8 +52,14 @@ def friction_law_figure(laws, *, speed_max: float = 10.0, title: str = ""):
 
     Args:
         laws: dict label -> list of ``(FrictionTerm, coefficient)``; the torque of a term is its
-            power divided by the joint speed, evaluated with the other speed at rest.
+            power divided by the joint speed, evaluated with the other speed at rest. Terms
+            that are not functions of the joint speeds alone (e.g. a mount's loss) are left
+            out of this figure.
     """
+    speeds = {"dphi1", "dphi2"}
+    laws = {label: [(term, c) for term, c in terms if term.functions is None
+                    and {s.name for s in term.power.free_symbols} <= speeds]
+            for label, terms in laws.items()}
     w = np.linspace(-speed_max, speed_max, 801)
     w = w[w != 0]
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.6))
@@ -93,6 +99,51 @@ def seeds_figure(seeds, k1_error, k2_error, val_error, *, title: str = ""):
         ax.set_xticks(x, [str(s) for s in seeds])
         ax.set_xlabel("seed")
         ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def forecast_figure(origins, errors, validation, *, bar: float | None = None, title: str = ""):
+    """Forecast error (% of each window's dH range) against forecast origin, one line per
+    procedure; the validation forecast (from the end of training) as a marker at its origin.
+
+    Args:
+        origins: ``(k,)`` origins inside the training part (s); ``errors``: dict procedure ->
+            ``(k,)`` errors; ``validation``: ``(origin, dict procedure -> error)``.
+    """
+    fig, ax = plt.subplots(figsize=(9, 4))
+    t_val, val = validation
+    for i, (name, err) in enumerate(errors.items()):
+        color = f"C{i}"
+        ax.plot(origins, err, "o-", color=color, lw=1, ms=4, label=name)
+        ax.plot([t_val], [val[name]], "*", color=color, ms=11)
+    if bar is not None:
+        ax.axhline(bar, color="k", ls=":", lw=1, label=f"{bar:g} % (issue's bar)")
+    ax.axvline(t_val, color="0.5", ls="--", lw=1)
+    ax.set_yscale("log")
+    ax.set_xlabel("forecast origin (s): fit on [0, origin], forecast the next window")
+    ax.set_ylabel("max error (% of window's dH range)")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def dissipation_rate_figure(centres, measured, models, *, title: str = ""):
+    """Mean dissipated power per block (W) against time: measured (slope of dH) and models."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.6))
+    axes[0].plot(centres, measured * 1e3, "k.-", lw=1, label="measured (slope of dH)")
+    for name, rate in models.items():
+        axes[0].plot(centres, rate * 1e3, lw=1, label=name)
+        axes[1].plot(centres, (rate / measured - 1) * 100, lw=1, label=name)
+    axes[0].set_yscale("log")
+    axes[0].set_ylabel("dissipated power (mW)")
+    axes[1].set_ylabel("model / measured - 1 (%)")
+    axes[1].axhline(0, color="k", lw=0.5)
+    for ax in axes:
+        ax.set_xlabel("t (s)")
+        ax.legend(fontsize=7)
     fig.suptitle(title)
     fig.tight_layout()
     return fig
