@@ -95,6 +95,7 @@ def seeds_figure(seeds, k1_error, k2_error, val_error, *, title: str = ""):
     axes[0].bar(x - 0.2, k1_error, 0.4, label="k1 error (%)")
     axes[0].bar(x + 0.2, k2_error, 0.4, label="k2 error (%)")
     axes[1].bar(x, val_error, 0.6, color="tab:red", label="validation max error (% of max|dH|)")
+    axes[0].axhline(1.0, color="tab:blue", ls=":", lw=1, label="1 % (k1 bar)")
     for ax in axes:
         ax.set_xticks(x, [str(s) for s in seeds])
         ax.set_xlabel("seed")
