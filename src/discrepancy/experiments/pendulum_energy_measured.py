@@ -13,7 +13,11 @@ from tqdm import tqdm
 
 from ..differentiation import SavitzkyGolay
 from ..energy import EnergyDiscrepancy, error_summary, percent_error
-from ..energy.dissipation import default_friction_library, support_loss_terms
+from ..energy.dissipation import (
+    default_friction_library,
+    integrated_powers,
+    support_loss_terms,
+)
 from ..errors import DataError
 from ..systems.double_pendulum import DoublePendulum, DoublePendulumParameters
 from .pendulum_energy import _file_law, _state_form, _state_form_text
@@ -172,6 +176,20 @@ def _compare_procedures(pend, rec, x, t, split, origins):
     return table
 
 
+def _equivalent_viscous(model, x, t) -> dict[str, float]:
+    """Per joint, the viscous coefficient (N m s) dissipating what the learned laws of that
+    joint dissipate over the recording: ``int P_joint dt / int w^2 dt``."""
+    speeds = {"joint 1": x[:, 2], "joint 2": x[:, 2] - x[:, 3]}
+    names = [*model.position_names, *model.velocity_names]
+    out = {}
+    for joint, w in speeds.items():
+        terms = [(term, c) for term, c in zip(model.terms_, model.coef_, strict=True)
+                 if term.name.endswith(joint)]
+        lost = sum(c * integrated_powers([term], x, t, names)[-1, 0] for term, c in terms)
+        out[joint] = float(lost / np.trapezoid(w ** 2, t))
+    return out
+
+
 def _block_rates(t, curves, seconds=4.0):
     """Mean slope (W) of each curve over consecutive blocks of ``seconds``."""
     edges = np.arange(t[0], t[-1] - seconds / 2, seconds)
@@ -234,6 +252,17 @@ def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
     rep.text("Restarted at the measured dH where validation begins, the chosen model's error "
              "is {:.3g} % of the window's range.".format(
                  main["validation_restarted_at_window_start"]["max_abs_percent_of_range"]))
+    k_eq = _equivalent_viscous(model, x, t)
+    rep.results["equivalent_viscous_coefficients_N_m_s"] = k_eq
+    p = pend.parameters
+    rep.text("Compared with the rig file's viscous law: the learned joint laws dissipate over "
+             "the recording what viscous coefficients of "
+             f"{k_eq['joint 1']:.3g} N m s (joint 1; file k1 = {p.k1:.3g}) and "
+             f"{k_eq['joint 2']:.3g} N m s (joint 2; file k2 = {p.k2:.3g}) would. The laws "
+             "differ in shape as well (a Coulomb torque is constant, so it matters most at "
+             "small swings), and the learned model puts part of the loss into the mount "
+             "instead of the joints; the file's viscous law, estimated in another way, "
+             "dissipates the wrong amount (see its errors above).")
     h = pend.energy(x)
     rep.figure(energy_figure(t, h[0], h, h[0] - h, split=t[split], title="Measured swing"),
                "energy.png", "E0 and H_m; dH = E0 - H_m (cf. paper Fig. 4a)")
