@@ -100,8 +100,10 @@ def _file_law_model(pend, x, t, split):
 
 def run_experiment(out_dir, *, quick: bool = False) -> Path:
     """The measured free swing: fit on 0-69.3 s, validate on the rest. ``quick``: 2 origins."""
+    from ..data.pendulum_recording import load_pendulum_recording
+
     folder = data_folder()
-    rec = _recording()
+    rec = load_pendulum_recording(folder / RECORDING)
     params = DoublePendulumParameters.from_mat(folder / PARAMETERS)
     pend = DoublePendulum(params)
     rep = Report(out_dir, "pendulum-energy-experiment", title="Energy lost to friction: measured "
@@ -111,9 +113,9 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
     horizon = rec.t[-1] - rec.split_time
     last = rec.split_time - horizon
     origins = [last - ORIGIN_SPACING * i for i in reversed(range(2 if quick else N_ORIGINS))]
-    table = _compare_procedures(pend, rec, x, t, split, origins)
+    table, fitted = _compare_procedures(pend, rec, x, t, split, origins)
     chosen = min(table, key=lambda name: table[name]["forecast_median_percent_of_range"])
-    model = _fit(pend, procedures(pend)[chosen], rec, rec.split_time)
+    model = fitted[chosen]
     dh, pred, errors = _continued(model, x, t, split)
     file_pred, file_errors = _file_law_model(pend, x, t, split)
     rep.results.update({
@@ -129,14 +131,8 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
     rep.results["state_form"] = _state_form(
         pend.energy, rec.angles[:rec.split_index], rec.t[:rec.split_index],
         {"validation (continued recording, same E0)": (rec.angles, rec.t)}, REAL_SMOOTHING)
-    _experiment_report(rep, model, pend, x, t, split, (dh, pred), file_pred)
+    _experiment_report(rep, fitted, pend, x, t, split, (dh, pred), file_pred)
     return rep.write()
-
-
-def _recording():
-    from ..data.pendulum_recording import load_pendulum_recording
-
-    return load_pendulum_recording(data_folder() / RECORDING)
 
 
 def _smoother():
@@ -158,8 +154,9 @@ def _forecast_error(model, x, t, start, stop):
 
 
 def _compare_procedures(pend, rec, x, t, split, origins):
-    """Every procedure's forecast errors from the origins, and its validation error."""
-    table = {}
+    """Every procedure's forecast errors from the origins and its validation error; and the
+    models each procedure fits on the whole training part."""
+    table, fitted = {}, {}
     n = len(t) - split
     for name, kwargs in tqdm(procedures(pend).items(), desc="procedures", disable=None):
         errs = []
@@ -173,7 +170,8 @@ def _compare_procedures(pend, rec, x, t, split, origins):
                        "training": _continued(final, x, t, split)[2]["training"],
                        "validation_continued_percent_of_range":
                            _forecast_error(final, x, t, split, len(t))}
-    return table
+        fitted[name] = final
+    return table, fitted
 
 
 def _equivalent_viscous(model, x, t) -> dict[str, float]:
@@ -200,7 +198,8 @@ def _block_rates(t, curves, seconds=4.0):
         for name, y in curves.items():
             rates[name].append(np.polyfit(t[sel], y[sel], 1)[0])
     return np.array(centres), {k: np.array(v) for k, v in rates.items()}
-def _experiment_report(rep, model, pend, x, t, split, fitted, file_pred):
+def _experiment_report(rep, models, pend, x, t, split, fitted, file_pred):
+    model = models[rep.results["chosen_procedure"]]
     rep.text(f"80 s at 1 kHz; training 0-{rep.results['split_time_s']:.3f} s, validation after. "
              "Velocities from Savitzky-Golay on the raw angles. Errors: max |dH - model| in % "
              "of max|dH| (paper) and of a window's own dH range. 'Continued' integrates the "
@@ -208,7 +207,7 @@ def _experiment_report(rep, model, pend, x, t, split, fitted, file_pred):
              "at the measured dH where the validation window starts.")
     _procedure_section(rep, pend, x, t, split)
     _model_section(rep, model, pend, x, t, split, fitted, file_pred)
-    _rates_section(rep, model, pend, x, t, split)
+    _rates_section(rep, models, x, t, split)
     _state_form_text(rep, rep.results["state_form"])
 
 
@@ -281,13 +280,14 @@ def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
                "is not a joint torque and is not drawn) and the rig file's viscous law")
 
 
-def _rates_section(rep, model, pend, x, t, split):
+def _rates_section(rep, models, x, t, split):
     from ..plots.energy import dissipation_rate_figure
 
     table = rep.results["procedures"]
+    model = models[rep.results["chosen_procedure"]]
     joint_only = min((n for n in table if n.startswith("default")),
                      key=lambda n: table[n]["forecast_median_percent_of_range"])
-    other = _fit(pend, procedures(pend)[joint_only], _recording(), rep.results["split_time_s"])
+    other = models[joint_only]
     dh = model.measured_delta_h(x)
     curves = {"measured": dh, "chosen": model.predict_states(x, t),
               f"best default-library procedure ({joint_only})": other.predict_states(x, t)}
