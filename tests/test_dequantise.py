@@ -67,6 +67,7 @@ def test_smooth_unquantised_signal_is_refused_not_silently_passed():
 @pytest.mark.parametrize("kwargs, error, text", [
     ({"resolution": 0.0}, ParameterError, "resolution must be > 0"),
     ({"resolution": [STEP, STEP, STEP]}, ParameterError, "one per encoder"),
+    ({"resolution": "fine"}, ParameterError, "resolution must be > 0"),
     ({"resolution": STEP, "encoders": [[1, 0, 0]]}, ShapeError, "encoders must be an"),
     ({"resolution": STEP, "encoders": [[1, 1], [1, 1]]}, ParameterError, "invertible"),
     ({"resolution": STEP, "iterations": 0}, ParameterError, "iterations"),

@@ -80,12 +80,16 @@ class Dequantised(Differentiator):
         return e
 
     def _steps(self, n: int) -> np.ndarray:
-        s = np.broadcast_to(np.asarray(self.resolution, dtype=float), (n,)) \
-            if np.ndim(self.resolution) <= 1 and np.size(self.resolution) in (1, n) else None
-        if s is None or not np.all(np.isfinite(s)) or np.any(s <= 0):
+        try:
+            steps = np.asarray(self.resolution, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            steps = np.array([np.nan])
+        if steps.size == 1:
+            steps = np.repeat(steps, n)
+        if steps.shape != (n,) or not np.all(np.isfinite(steps)) or np.any(steps <= 0):
             raise ParameterError(f"resolution must be > 0, a scalar or {n} values (one per "
                                  f"encoder); got {self.resolution!r}")
-        return s
+        return steps
 
     def _compute(self, x, t):
         if not isinstance(self.iterations, (int, np.integer)) or self.iterations < 1:
