@@ -182,3 +182,34 @@ def test_friction_law_figure_shows_each_joints_own_torque():
     np.testing.assert_allclose(tau1[w1 > 0], 5e-4)                     # joint 1 alone
     w2, tau2 = joint2.get_data()
     np.testing.assert_allclose(tau2[w2 > 0], 2e-4 + 1e-5 * w2[w2 > 0] ** 2)   # joint 2 + arm 2
+
+
+def test_bootstrap_intervals_cover_the_true_friction_and_shrink_with_less_noise(swings):
+    pend, t, (x, _) = swings
+    p = pend.parameters
+    rng = np.random.default_rng(3)
+    widths = []
+    for noise in (3e-4, 3e-5):
+        q = x[:, :2] + rng.normal(0, noise, x[:, :2].shape)
+        model = EnergyDiscrepancy(pend.energy, max_terms=2,
+                                  differentiation_method=dc.SavitzkyGolay(51, 3)).fit(q, t)
+        assert [term.name for term in model.terms_] == ["viscous joint 1", "viscous joint 2"]
+        unc = model.bootstrap(q, t, n_resamples=100, seed=1)
+        low, high = unc.interval()
+        assert np.all(low[0] <= [p.k1, p.k2]) and np.all([p.k1, p.k2] <= high[0])
+        widths.append(high[0] - low[0])
+    assert np.all(widths[1] < 0.8 * widths[0])    # smoothing bias remains at low noise
+
+
+def test_bootstrap_refuses_what_it_cannot_do(swings):
+    pend, t, (x, _) = swings
+    model = EnergyDiscrepancy(pend.energy)
+    with pytest.raises(NotFittedError):
+        model.bootstrap(x[:, :2], t, dq=x[:, 2:])
+    model.fit(x[:, :2], t, dq=x[:, 2:])
+    with pytest.raises(ParameterError, match="block_seconds"):
+        model.bootstrap(x[:, :2], t, dq=x[:, 2:], block_seconds=0.0)
+    with pytest.raises(ParameterError, match="at least 4 blocks"):
+        model.bootstrap(x[:, :2], t, dq=x[:, 2:], block_seconds=3.0)
+    with pytest.raises(ParameterError, match="n_resamples"):
+        model.bootstrap(x[:, :2], t, dq=x[:, 2:], n_resamples=1)

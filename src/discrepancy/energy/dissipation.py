@@ -117,19 +117,26 @@ def integrated_powers(terms, values: np.ndarray, t: np.ndarray,
     return cumulative_trapezoid(np.column_stack(columns), t, axis=0, initial=0.0)
 
 
-def _nonnegative_fit(features: np.ndarray, target: np.ndarray, block: int | None = None
-                     ) -> np.ndarray:
+def block_weights(target: np.ndarray, block: int) -> np.ndarray:
+    """Relative weights ``1 / |energy lost per block|`` of the block fit (see below)."""
+    loss = np.diff(target[np.arange(0, len(target), block)])
+    return 1.0 / np.maximum(np.abs(loss), 1e-3 * np.max(np.abs(loss)))
+
+
+def _nonnegative_fit(features: np.ndarray, target: np.ndarray, block: int | None = None,
+                     weights: np.ndarray | None = None) -> np.ndarray:
     """``[c, xi]`` of ``target ~ c + features @ xi`` with ``xi >= 0``.
 
     ``block=None``: least squares on the cumulative curves. ``block=b`` (samples): the energy
     lost over consecutive blocks of ``b`` samples is fitted with *relative* weights
-    ``1 / loss``, so late, low-energy blocks count as much as early ones (an absolute fit is
-    dominated by the first seconds of a decaying swing); ``c`` is then the mean residual.
+    ``1 / loss`` (or the given ``weights``, e.g. a bootstrap keeping the original fit's), so
+    late, low-energy blocks count as much as early ones (an absolute fit is dominated by the
+    first seconds of a decaying swing); ``c`` is then the mean residual.
     """
     if block is not None:
         idx = np.arange(0, len(target), block)
         loss, gained = np.diff(target[idx]), np.diff(features[idx], axis=0)
-        w = 1.0 / np.maximum(np.abs(loss), 1e-3 * np.max(np.abs(loss)))
+        w = block_weights(target, block) if weights is None else weights
         scale = np.maximum(np.max(np.abs(gained), axis=0), 1e-300)
         xi, _ = nnls(gained * w[:, None] / scale, loss * w)
         xi = xi / scale

@@ -128,6 +128,36 @@ class EnergyDiscrepancy:
             self.offset_ = self.fit_.offset
         return self
 
+    def bootstrap(self, q, t, *, dq=None, n_resamples: int = 200, block_seconds: float = 1.0,
+                  seed: int = 0):
+        """Uncertainty of every learned friction coefficient (dissipation form): a wild block
+        bootstrap of the fit on these (training) data, blocks of ``block_seconds`` (s); see
+        :mod:`discrepancy.energy.uncertainty`.
+
+        Returns a :class:`~discrepancy.models.uncertainty.CoefficientUncertainty` (one row,
+        ``"dH"``; one column per term, in the terms' units) with ``std``, ``interval()`` and
+        ``table()``.
+        """
+        from .uncertainty import bootstrap_dissipation
+
+        self._check_fitted()
+        if self.form != "dissipation":
+            raise ParameterError("bootstrap is for the dissipation form; the state form is a "
+                                 "DiscrepancyModel-like regression (use its optimizer's tools)")
+        if not self.terms_:
+            raise ParameterError("the fit chose no friction term: nothing to bootstrap")
+        x, t = self.states(q, t, dq=dq)
+        dt = float(np.median(np.diff(t)))
+        if not np.isfinite(block_seconds) or block_seconds <= 0:
+            raise ParameterError(f"block_seconds must be > 0 s; got {block_seconds!r}")
+        features = integrated_powers(self.terms_, x, t, self._state_names())
+        fit_block = None if self.block_seconds is None else \
+            max(2, int(round(self.block_seconds / dt)))
+        return bootstrap_dissipation(
+            features, self.measured_delta_h(x), self.coef_, self.offset_,
+            [term.name for term in self.terms_], fit_block=fit_block, n_resamples=n_resamples,
+            samples_per_block=max(2, int(round(block_seconds / dt))), seed=seed)
+
     def _check_fitted(self):
         if not hasattr(self, "coef_"):
             raise NotFittedError("EnergyDiscrepancy is not fitted; call fit(q, t) first")
