@@ -46,6 +46,9 @@ def test_synthetic_quick(tmp_path):
         # reconstructing the angles from the encoder counts helps on these seeds
         assert seed["k1_relative_error_percent"] < \
             seed["without_dequantisation"]["k1_relative_error_percent"]
+        for name in ("k1", "k2"):      # bootstrap intervals hold the truth
+            low, high = seed[f"{name}_95_percent_interval"]
+            assert low <= truth[name] <= high
         assert all(t["coefficient"] > 0 for t in seed["identified_terms"])
     state = results["per_seed"][0]["state_form"]
     spans = state["paper library + cos(phi1-phi2) dphi1 dphi2 (spans H_m)"]
@@ -77,6 +80,9 @@ def test_measured_swing(tmp_path):
     assert main["training"]["max_abs_percent_of_max"] <= 3.0
     for key in ("validation_continued", "validation_restarted_at_window_start"):
         assert np.isfinite(main[key]["max_abs_percent_of_range"])
+    for term in main["identified_terms"]:
+        low, high = main["bootstrap_95_percent_intervals"][term["name"]]
+        assert 0 <= low <= term["coefficient"] <= high
     # the procedure is chosen by forecasts inside the training part only
     table = results["procedures"]
     chosen = results["chosen_procedure"]

@@ -96,6 +96,15 @@ def _viscous(model) -> tuple[float, float]:
     return coef.get("viscous joint 1", 0.0), coef.get("viscous joint 2", 0.0)
 
 
+def _viscous_intervals(uncertainty) -> tuple[list[float], list[float]]:
+    """95 % bootstrap intervals ``[low, high]`` of k1 and k2 (``nan`` for a missing term)."""
+    low, high = uncertainty.interval()
+    out = {name: [float(lo), float(hi)]
+           for name, lo, hi in zip(uncertainty.feature_names, low[0], high[0], strict=True)}
+    missing = [float("nan"), float("nan")]
+    return out.get("viscous joint 1", missing), out.get("viscous joint 2", missing)
+
+
 def _synthetic_seed(pend, seed, t):
     rng = np.random.default_rng(seed)
     runs = []
@@ -122,12 +131,14 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
         k1, k2 = _viscous(model)
         k1_raw, k2_raw = _viscous(EnergyDiscrepancy(
             pend.energy, differentiation_method=_differentiator(dequantise=False)).fit(q, t))
+        k1_interval, k2_interval = _viscous_intervals(model.bootstrap(q, t, seed=seed))
         train = model.score(q, t, start=model.offset_)
         val = model.score(q_val, t)
         entry = {"seed": seed, "initial_state_training": x0, "initial_state_validation": x0_val,
                  "identified_terms": model.identified_terms(), "equation": model.equation(),
                  "k1": k1, "k2": k2, "k1_relative_error_percent": abs(k1 / params.k1 - 1) * 100,
                  "k2_relative_error_percent": abs(k2 / params.k2 - 1) * 100,
+                 "k1_95_percent_interval": k1_interval, "k2_95_percent_interval": k2_interval,
                  "without_dequantisation": {
                      "k1_relative_error_percent": abs(k1_raw / params.k1 - 1) * 100,
                      "k2_relative_error_percent": abs(k2_raw / params.k2 - 1) * 100},
@@ -137,6 +148,7 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
         per_seed.append(entry)
         rows.append([seed, k1, k2, entry["k1_relative_error_percent"],
                      entry["k2_relative_error_percent"],
+                     *("[{:.4g}, {:.4g}]".format(*iv) for iv in (k1_interval, k2_interval)),
                      entry["without_dequantisation"]["k1_relative_error_percent"],
                      train["max_abs_percent_of_max"],
                      val["max_abs_percent_of_max"], val["max_abs_percent_of_range"]])
@@ -153,7 +165,11 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
             "validation_error_percent_of_max_median": float(np.median(vale)),
             "validation_error_percent_of_max_max": float(vale.max()),
             "all_seeds_k1_within_1_percent": bool(np.all(k1e <= 1)),
-            "all_seeds_k2_within_10_percent": bool(np.all(k2e <= 10))}})
+            "all_seeds_k2_within_10_percent": bool(np.all(k2e <= 10)),
+            "true_value_inside_95_percent_interval": {
+                name: int(sum(e[f"{name}_95_percent_interval"][0] <= getattr(params, name)
+                              <= e[f"{name}_95_percent_interval"][1] for e in per_seed))
+                for name in ("k1", "k2")}}})
     rep.text(f"True friction: k1 = {params.k1:.4g} N m s, k2 = {params.k2:.4g} N m s. "
              f"{len(seeds)} seeds, {DURATION:g} s at {RATE:g} Hz, angles read by "
              f"{ENCODER_COUNTS}-count encoders on phi1 and phi2 - phi1. The angles are "
@@ -165,8 +181,12 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
     rep.text("## Dissipation form (recommended)\nErrors are max |dH - model| in % of max|dH| "
              "(paper) and of the window's dH range. Validation is a new swing, so the model "
              "starts at dH = 0 there.")
-    rep.table(["seed", "k1", "k2", "k1 err %", "k2 err %", "k1 err % (SG only)", "train %max",
-               "val %max", "val %range"], rows)
+    rep.table(["seed", "k1", "k2", "k1 err %", "k2 err %", "k1 95 % interval",
+               "k2 95 % interval", "k1 err % (SG only)", "train %max", "val %max", "val %range"],
+              rows)
+    covered = rep.results["dissipation_form_summary"]["true_value_inside_95_percent_interval"]
+    rep.text(f"Bootstrap intervals (wild, 1 s blocks, 200 resamples) hold the true k1 in "
+             f"{covered['k1']}/{len(seeds)} seeds and the true k2 in {covered['k2']}/{len(seeds)}.")
     _quantisation_control(rep, pend, params, per_seed, t)
     model, q, q_val = first
     _synthetic_figures(rep, pend, model, q, q_val, t, energy_figure, fit_figure)

@@ -117,6 +117,10 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
     chosen = min(table, key=lambda name: table[name]["forecast_median_percent_of_range"])
     model = fitted[chosen]
     dh, pred, errors = _continued(model, x, t, split)
+    low, high = model.bootstrap(rec.angles[:rec.split_index], rec.t[:rec.split_index]).interval()
+    errors["bootstrap_95_percent_intervals"] = {
+        term.name: [float(lo), float(hi)] for term, lo, hi in zip(model.terms_, low[0], high[0],
+                                                                   strict=True)}
     file_pred, file_errors = _file_law_model(pend, x, t, split)
     rep.results.update({
         "parameters": params.as_dict(), "split_time_s": rec.split_time,
@@ -243,6 +247,15 @@ def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
     dh, pred = fitted
     main, rig = rep.results["dissipation_form"], rep.results["rig_file_viscous_law"]
     rep.text(f"## The chosen model\n`{model.equation()}`")
+    rep.table(["term", "coefficient", "unit", "95 % interval (wild block bootstrap, 1 s)"],
+              [[term.name, c, term.unit, "[{:.4g}, {:.4g}]".format(
+                  *main["bootstrap_95_percent_intervals"][term.name])]
+               for term, c in zip(model.terms_, model.coef_, strict=True)])
+    loose = [name for name, (lo, _) in main["bootstrap_95_percent_intervals"].items() if lo <= 0]
+    if loose:
+        rep.text(f"The intervals of {', '.join(loose)} reach 0: with the recording's noise the "
+                 "data do not pin these terms down on their own; they trade off against the "
+                 "other laws, which is also why other procedures above pick other mixes.")
     rows = [[name, r["training"]["max_abs_percent_of_max"],
              r["validation_continued"]["max_abs_percent_of_max"],
              r["validation_continued"]["max_abs_percent_of_range"]]
