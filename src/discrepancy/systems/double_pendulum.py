@@ -77,15 +77,21 @@ class DoublePendulumParameters:
         return dict(zip(PARAMETER_ORDER, astuple(self), strict=True))
 
 
+def _centres(q):
+    """``[(mass, x, y)]`` of the two centres of mass (``y`` up) for angle functions ``q``."""
+    m1, m2, a1, a2, L1 = (symbol(n) for n in PARAMETER_ORDER[:5])
+    return [(m1, a1 * sp.sin(q[0]), a1 * sp.cos(q[0])),
+            (m2, L1 * sp.sin(q[0]) + a2 * sp.sin(q[1]), L1 * sp.cos(q[0]) + a2 * sp.cos(q[1]))]
+
+
 @cache
 def _symbolic_model():
     """Energy, dissipation and equations of motion with symbolic parameters (derived once)."""
     phi1, phi2, dphi1, dphi2 = (symbol(n) for n in STATE_NAMES)
-    m1, m2, a1, a2, L1, I1, I2, k1, k2, g = (symbol(n) for n in PARAMETER_ORDER)
+    m1, m2, _, _, _, I1, I2, k1, k2, g = (symbol(n) for n in PARAMETER_ORDER)
     t = sp.Symbol("t", real=True)
     q = [sp.Function("q1")(t), sp.Function("q2")(t)]
-    x1, y1 = a1 * sp.sin(q[0]), a1 * sp.cos(q[0])
-    x2, y2 = L1 * sp.sin(q[0]) + a2 * sp.sin(q[1]), L1 * sp.cos(q[0]) + a2 * sp.cos(q[1])
+    (_, x1, y1), (_, x2, y2) = _centres(q)
     speed2 = [sp.diff(x1, t) ** 2 + sp.diff(y1, t) ** 2, sp.diff(x2, t) ** 2 + sp.diff(y2, t) ** 2]
     kinetic = (m1 * speed2[0] + m2 * speed2[1]) / 2 \
         + (I1 * sp.diff(q[0], t) ** 2 + I2 * sp.diff(q[1], t) ** 2) / 2
@@ -105,11 +111,10 @@ def _symbolic_pivot_force():
     symbols of the state and of the angular accelerations ``ddphi1``, ``ddphi2``."""
     phi1, phi2, dphi1, dphi2 = (symbol(n) for n in STATE_NAMES)
     dd = [symbol("ddphi1"), symbol("ddphi2")]
-    m1, m2, a1, a2, L1, *_, g = (symbol(n) for n in PARAMETER_ORDER)
+    m1, m2, *_, g = (symbol(n) for n in PARAMETER_ORDER)
     t = sp.Symbol("t", real=True)
     q = [sp.Function("q1")(t), sp.Function("q2")(t)]
-    centres = [(m1, a1 * sp.sin(q[0]), a1 * sp.cos(q[0])),
-               (m2, L1 * sp.sin(q[0]) + a2 * sp.sin(q[1]), L1 * sp.cos(q[0]) + a2 * sp.cos(q[1]))]
+    centres = _centres(q)
     to_state = {sp.diff(q[i], t, 2): dd[i] for i in range(2)}
     to_state |= {sp.diff(q[0], t): dphi1, sp.diff(q[1], t): dphi2}
     fx = sum(m * sp.diff(x, t, 2) for m, x, _ in centres)
