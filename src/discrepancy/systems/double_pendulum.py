@@ -20,7 +20,7 @@ from scipy.integrate import solve_ivp
 
 from ..errors import ConvergenceError, DataError, ParameterError, ShapeError
 from ..symbolic import compile_numpy, symbol
-from .base import System, check_physical_parameters
+from .base import PAPER_TABLE_1, System, check_physical_parameters
 from .mechanics import lagrange_equations
 
 STATE_NAMES = ("phi1", "phi2", "dphi1", "dphi2")
@@ -38,16 +38,16 @@ class DoublePendulumParameters:
         (N m s / rad). g: gravity (m/s^2).
     """
 
-    m1: float = 0.2704
-    m2: float = 0.2056
-    a1: float = 0.1910
-    a2: float = 0.1621
-    L1: float = 0.2667
-    I1: float = 0.003
-    I2: float = 0.0011
-    k1: float = 7.24e-4
-    k2: float = 1.65e-4
-    g: float = 9.818
+    m1: float = PAPER_TABLE_1["m1"]
+    m2: float = PAPER_TABLE_1["m2"]
+    a1: float = PAPER_TABLE_1["a1"]
+    a2: float = PAPER_TABLE_1["a2"]
+    L1: float = PAPER_TABLE_1["L1"]
+    I1: float = PAPER_TABLE_1["I1"]
+    I2: float = PAPER_TABLE_1["I2"]
+    k1: float = PAPER_TABLE_1["k1"]
+    k2: float = PAPER_TABLE_1["k2"]
+    g: float = PAPER_TABLE_1["g"]
 
     def __post_init__(self):
         check_physical_parameters(self)

@@ -22,7 +22,7 @@ import sympy as sp
 
 from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import compile_numpy, symbol
-from .base import System, check_physical_parameters
+from .base import PAPER_TABLE_1, System, check_physical_parameters
 from .mechanics import lagrange_equations
 
 STATE_NAMES = ("phi1", "phi2", "s", "dphi1", "dphi2", "ds")
@@ -38,17 +38,17 @@ class CartPendulumParameters:
     lengths (m); ``k``: viscous joint friction (N m s); ``g`` (m/s^2).
     """
 
-    m1: float = 0.2704
-    m2: float = 0.2056
-    a1: float = 0.1910
-    a2: float = 0.1621
-    I1: float = 0.003
-    I2: float = 0.0011
-    l1: float = 0.2667
-    l2: float = 0.2667
-    k1: float = 7.24e-4
-    k2: float = 1.65e-4
-    g: float = 9.818
+    m1: float = PAPER_TABLE_1["m1"]
+    m2: float = PAPER_TABLE_1["m2"]
+    a1: float = PAPER_TABLE_1["a1"]
+    a2: float = PAPER_TABLE_1["a2"]
+    I1: float = PAPER_TABLE_1["I1"]
+    I2: float = PAPER_TABLE_1["I2"]
+    l1: float = PAPER_TABLE_1["L1"]
+    l2: float = PAPER_TABLE_1["L1"]    # Table 1 lists 0.2667 m for both arms
+    k1: float = PAPER_TABLE_1["k1"]
+    k2: float = PAPER_TABLE_1["k2"]
+    g: float = PAPER_TABLE_1["g"]
 
     def __post_init__(self):
         check_physical_parameters(self)
