@@ -168,12 +168,13 @@ def _compare_procedures(pend, rec, x, t, split, origins):
             k = int(np.searchsorted(t, origin))
             errs.append(_forecast_error(_fit(pend, kwargs, rec, origin), x, t, k, k + n))
         final = _fit(pend, kwargs, rec, rec.split_time)
+        errors = _continued(final, x, t, split)[2]
         table[name] = {"forecast_errors_percent_of_range": errs,
                        "forecast_median_percent_of_range": float(np.median(errs)),
                        "terms": [term.name for term in final.terms_],
-                       "training": _continued(final, x, t, split)[2]["training"],
+                       "training": errors["training"],
                        "validation_continued_percent_of_range":
-                           _forecast_error(final, x, t, split, len(t))}
+                           errors["validation_continued"]["max_abs_percent_of_range"]}
         fitted[name] = final
     return table, fitted
 
