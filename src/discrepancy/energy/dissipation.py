@@ -123,7 +123,7 @@ def block_weights(target: np.ndarray, block: int) -> np.ndarray:
     return 1.0 / np.maximum(np.abs(loss), 1e-3 * np.max(np.abs(loss)))
 
 
-def _nonnegative_fit(features: np.ndarray, target: np.ndarray, block: int | None = None,
+def nonnegative_fit(features: np.ndarray, target: np.ndarray, block: int | None = None,
                      weights: np.ndarray | None = None) -> np.ndarray:
     """``[c, xi]`` of ``target ~ c + features @ xi`` with ``xi >= 0``.
 
@@ -167,7 +167,7 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     bound 0 duplicate a smaller subset and are skipped. The size grows from 1 while the best
     score of the next size is lower by more than the fraction ``tolerance`` (an elbow rule:
     the cumulative features are strongly correlated, so noise alone lowers the error a little
-    with every term). ``block`` chooses the fit (see ``_nonnegative_fit``).
+    with every term). ``block`` chooses the fit (see ``nonnegative_fit``).
 
     Returns ``(support, candidates)`` with ``candidates`` the sorted ``(score, subset)`` list;
     ``support`` is empty when no law fits with positive coefficients (no dissipation seen).
@@ -183,7 +183,7 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     for k in range(1, max_terms + 1):
         for subset in combinations(range(p), k):
             cols = features[:, subset]
-            coef = _nonnegative_fit(cols[:cut], delta_h[:cut], block)
+            coef = nonnegative_fit(cols[:cut], delta_h[:cut], block)
             if np.any(coef[1:] == 0):
                 continue
             error = delta_h - _predict(coef, cols)
@@ -225,7 +225,7 @@ def fit_dissipation(features: np.ndarray, delta_h: np.ndarray, terms,
     """Select terms (:func:`select_terms`) and refit them on all samples."""
     support, candidates = select_terms(features, delta_h, **selection)
     if support:
-        coef = _nonnegative_fit(features[:, support], delta_h, selection.get("block"))
+        coef = nonnegative_fit(features[:, support], delta_h, selection.get("block"))
     else:
         coef = np.array([np.mean(delta_h)])
     named = [(s, [terms[i].name for i in sub]) for s, sub in candidates]

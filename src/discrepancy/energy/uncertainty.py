@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..models.uncertainty import CoefficientUncertainty
-from .dissipation import _nonnegative_fit, block_weights
+from .dissipation import block_weights, nonnegative_fit
 
 
 def bootstrap_dissipation(features: np.ndarray, delta_h: np.ndarray, coef: np.ndarray,
@@ -45,7 +45,7 @@ def bootstrap_dissipation(features: np.ndarray, delta_h: np.ndarray, coef: np.nd
     samples = np.empty((n_resamples, 1, len(coef)))
     for r in tqdm(range(n_resamples), desc="bootstrap", disable=None, leave=False):
         signs = np.repeat(rng.choice([-1.0, 1.0], n_blocks), samples_per_block)[:m]
-        samples[r, 0] = _nonnegative_fit(features, model + signs * residual, fit_block,
+        samples[r, 0] = nonnegative_fit(features, model + signs * residual, fit_block,
                                          weights)[1:]
     return CoefficientUncertainty(np.asarray(coef, float)[None, :].copy(), samples, ["dH"],
                                   list(names), samples_per_block)
