@@ -31,7 +31,7 @@ def main(n_seeds: int = 50) -> None:
                "Dequantised + Savitzky-Golay": pe._differentiator()}
     errors = {name: [] for name in methods}
     for seed in range(10, 10 + n_seeds):
-        (_, q), _ = pe._synthetic_seed(pend, seed, t)
+        (_, q, _), _ = pe._synthetic_seed(pend, seed, t)
         for name, method in methods.items():
             errors[name].append(k_errors(pend, q, t, method))
     rows = []

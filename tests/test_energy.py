@@ -213,3 +213,40 @@ def test_bootstrap_refuses_what_it_cannot_do(swings):
         model.bootstrap(x[:, :2], t, dq=x[:, 2:], block_seconds=3.0)
     with pytest.raises(ParameterError, match="n_resamples"):
         model.bootstrap(x[:, :2], t, dq=x[:, 2:], n_resamples=1)
+
+
+def test_forecast_band_holds_the_true_energy_loss_and_narrows_with_less_noise(swings):
+    """The band of dH on the second swing (another energy; exact dH = E0 - H_m from the
+    noise-free states), and of the first swing's fit continued against the noise-free part
+    of what it forecasts: the measured dH = E0 (noisy sample) - H_m(smoothed states), whose
+    smoothing bias, a constant offset measured here against the exact states, the fit's
+    offset absorbs."""
+    pend, t, (x, x_new) = swings
+    rng = np.random.default_rng(4)
+    widths = []
+    for noise in (3e-4, 3e-5):
+        q, q_new = (s[:, :2] + rng.normal(0, noise, s[:, :2].shape) for s in (x, x_new))
+        model = EnergyDiscrepancy(pend.energy, max_terms=2,
+                                  differentiation_method=dc.SavitzkyGolay(51, 3)).fit(q, t)
+        unc = model.bootstrap(q, t, n_resamples=100, seed=1)
+        edge = 25
+        exact_new = pend.energy(x_new[:1])[0] - pend.energy(x_new[edge:-edge])
+        low, high = model.predict_interval(q_new, t, unc)
+        assert np.mean((low <= exact_new) & (exact_new <= high)) > 0.9
+        smoothing_bias = np.mean(pend.energy(model.states(q, t)[0]) - pend.energy(x[edge:-edge]))
+        exact_fit = model.e0_ - pend.energy(x[edge:-edge]) - smoothing_bias
+        low_c, high_c = model.predict_interval(q, t, unc, continued=True)
+        assert np.mean((low_c <= exact_fit) & (exact_fit <= high_c)) > 0.8   # pointwise 95 %
+        widths.append(np.max(high - low))
+    assert widths[1] < 0.5 * widths[0]
+
+
+def test_forecast_band_refuses_a_foreign_uncertainty_and_a_bad_level(swings):
+    pend, t, (x, x_new) = swings
+    model = EnergyDiscrepancy(pend.energy, max_terms=2).fit(x[:, :2], t, dq=x[:, 2:])
+    unc = model.bootstrap(x[:, :2], t, dq=x[:, 2:], n_resamples=10)
+    other = EnergyDiscrepancy(pend.energy, max_terms=1).fit(x[:, :2], t, dq=x[:, 2:])
+    with pytest.raises(ParameterError, match="this model's bootstrap"):
+        other.predict_interval(x_new[:, :2], t, unc, dq=x_new[:, 2:])
+    with pytest.raises(ParameterError, match="level"):
+        model.predict_interval(x_new[:, :2], t, unc, dq=x_new[:, 2:], level=95)

@@ -50,6 +50,8 @@ def test_synthetic_quick(tmp_path):
             low, high = seed[f"{name}_95_percent_interval"]
             assert low <= truth[name] <= high
         assert all(t["coefficient"] > 0 for t in seed["identified_terms"])
+        # the coefficients' band, carried to the new swing, holds its true energy loss
+        assert seed["validation_true_loss_inside_95_percent_band_fraction"] >= 0.8
     state = results["per_seed"][0]["state_form"]
     spans = state["paper library + cos(phi1-phi2) dphi1 dphi2 (spans H_m)"]
     paper = state["paper library (does not span H_m)"]
@@ -83,6 +85,11 @@ def test_measured_swing(tmp_path):
     for term in main["identified_terms"]:
         low, high = main["bootstrap_95_percent_intervals"][term["name"]]
         assert 0 <= low <= term["coefficient"] <= high
+    # the chosen law's own forecast error lies among those of its bootstrap resamples (a band
+    # built without each resample's offset would miss the window by the offset, ~0.2 J)
+    spread = main["forecast_band"]["validation_error_of_resampled_laws_percent_of_range"]
+    assert spread["2.5 %"] <= main["validation_continued"]["max_abs_percent_of_range"] \
+        <= spread["97.5 %"] < 100
     # the procedure is chosen by forecasts inside the training part only
     table = results["procedures"]
     chosen = results["chosen_procedure"]

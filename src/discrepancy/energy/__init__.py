@@ -11,8 +11,9 @@ from .dissipation import (
 from .hamiltonian import EnergyTautologyWarning, check_span, energy_span_residual
 from .metrics import error_summary, percent_error
 from .model import EnergyDiscrepancy
+from .uncertainty import DissipationUncertainty
 
-__all__ = ["DissipationFit", "EnergyDiscrepancy", "EnergyTautologyWarning", "FrictionTerm",
-           "check_span", "default_friction_library", "energy_span_residual", "error_summary",
-           "fit_dissipation", "integrated_powers", "percent_error", "select_terms",
-           "support_loss_terms"]
+__all__ = ["DissipationFit", "DissipationUncertainty", "EnergyDiscrepancy",
+           "EnergyTautologyWarning", "FrictionTerm", "check_span", "default_friction_library",
+           "energy_span_residual", "error_summary", "fit_dissipation", "integrated_powers",
+           "percent_error", "select_terms", "support_loss_terms"]

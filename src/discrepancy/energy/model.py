@@ -10,6 +10,7 @@ from ..symbolic import feature_name
 from .dissipation import default_friction_library, fit_dissipation, integrated_powers
 from .hamiltonian import check_span
 from .metrics import error_summary
+from .uncertainty import DissipationUncertainty, bootstrap_dissipation
 
 FORMS = ("dissipation", "state")
 
@@ -134,12 +135,10 @@ class EnergyDiscrepancy:
         bootstrap of the fit on these (training) data, blocks of ``block_seconds`` (s); see
         :mod:`discrepancy.energy.uncertainty`.
 
-        Returns a :class:`~discrepancy.models.uncertainty.CoefficientUncertainty` (one row,
+        Returns a :class:`~discrepancy.energy.uncertainty.DissipationUncertainty` (one row,
         ``"dH"``; one column per term, in the terms' units) with ``std``, ``interval()`` and
-        ``table()``.
+        ``table()``, and the resampled offsets, for :meth:`predict_interval`.
         """
-        from .uncertainty import bootstrap_dissipation
-
         self._check_fitted()
         if self.form != "dissipation":
             raise ParameterError("bootstrap is for the dissipation form; the state form is a "
@@ -179,6 +178,39 @@ class EnergyDiscrepancy:
         if self.form == "state":
             return self._theta(x) @ self.coef_
         return start + integrated_powers(self.terms_, x, t, self._state_names()) @ self.coef_
+
+    def predict_interval(self, q, t, uncertainty, *, dq=None, level: float = 0.95,
+                         continued: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Pointwise ``level`` band ``(low, high)`` of the model ``dH`` (J), each ``(m,)``.
+
+        ``uncertainty`` is this model's :meth:`bootstrap`. ``continued=False``: a new
+        trajectory (``dH(t0) = 0``, as ``predict(start=0)``); ``continued=True``: the training
+        recording continued past its end (each resample with its own offset, as
+        ``predict(start=offset_)``), so ``t`` must start where the training data started.
+        The band holds the noise-driven uncertainty of the chosen law's coefficients, not
+        that of the choice of terms.
+        """
+        if not 0 < level < 1:
+            raise ParameterError(f"level must be in (0, 1); got {level!r}")
+        x, t = self.states(q, t, dq=dq)
+        curves = self.resampled_predictions_states(x, t, uncertainty, continued=continued)
+        tail = (1 - level) / 2
+        low, high = np.quantile(curves, [tail, 1 - tail], axis=0)
+        return low, high
+
+    def resampled_predictions_states(self, x, t, uncertainty, *,
+                                     continued: bool = False) -> np.ndarray:
+        """Every bootstrap resample's model ``dH`` (J) along states ``x`` ``(m, 2k)``:
+        ``(R, m)``; see :meth:`predict_interval`."""
+        self._check_fitted()
+        names = [term.name for term in getattr(self, "terms_", ())]
+        if not isinstance(uncertainty, DissipationUncertainty) or \
+                list(uncertainty.feature_names) != names:
+            raise ParameterError("uncertainty must be this model's bootstrap(...) (terms "
+                                 f"{names}); got {type(uncertainty).__name__} with terms "
+                                 f"{list(getattr(uncertainty, 'feature_names', []))}")
+        features = integrated_powers(self.terms_, np.asarray(x, float), t, self._state_names())
+        return uncertainty.curves(features, continued=continued)
 
     def score(self, q, t, *, dq=None, start: float = 0.0) -> dict[str, float]:
         """Percentage errors (paper's ``max|dH|`` and the window's ``dH`` range) on a trajectory."""

@@ -11,6 +11,8 @@ linear fit of pointwise residuals, not a non-negative fit of a cumulative curve.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..errors import ParameterError
@@ -18,10 +20,30 @@ from ..models.uncertainty import CoefficientUncertainty
 from .dissipation import block_weights, nonnegative_fit
 
 
+@dataclass(frozen=True)
+class DissipationUncertainty(CoefficientUncertainty):
+    """Bootstrap distribution of a dissipation law's coefficients and of its offset.
+
+    Attributes (besides :class:`~discrepancy.models.uncertainty.CoefficientUncertainty`'s):
+        offsets: each resample's offset ``c`` (J), ``(R,)``: with it a resample reproduces
+            its own fit of the training curve, so a forecast that continues the training fit
+            carries the uncertainty of where that fit hands over.
+    """
+
+    offsets: np.ndarray | None = None
+
+    def curves(self, features: np.ndarray, *, continued: bool) -> np.ndarray:
+        """Every resample's model ``dH`` (J), ``(R, m)``, from the terms' integrated powers
+        ``features`` ``(m, k)``; ``continued``: with each resample's offset (the training
+        fit continued), else starting at 0 (a new trajectory)."""
+        start = self.offsets[:, None] if continued else 0.0
+        return start + self.samples[:, 0, :] @ features.T
+
+
 def bootstrap_dissipation(features: np.ndarray, delta_h: np.ndarray, coef: np.ndarray,
                           offset: float, names: list[str], *, samples_per_block: int,
                           fit_block: int | None = None, n_resamples: int = 200,
-                          seed: int = 0) -> CoefficientUncertainty:
+                          seed: int = 0) -> DissipationUncertainty:
     """Bootstrap the coefficients ``coef`` ``(k,)`` of ``delta_h ~ offset + features @ coef``.
 
     ``features`` ``(m, k)`` are the selected terms' integrated powers, ``fit_block`` the fit's
@@ -43,9 +65,10 @@ def bootstrap_dissipation(features: np.ndarray, delta_h: np.ndarray, coef: np.nd
     weights = None if fit_block is None else block_weights(delta_h, fit_block)
     rng = np.random.default_rng(seed)
     samples = np.empty((n_resamples, 1, len(coef)))
+    offsets = np.empty(n_resamples)
     for r in tqdm(range(n_resamples), desc="bootstrap", disable=None, leave=False):
         signs = np.repeat(rng.choice([-1.0, 1.0], n_blocks), samples_per_block)[:m]
-        samples[r, 0] = nonnegative_fit(features, model + signs * residual, fit_block,
-                                         weights)[1:]
-    return CoefficientUncertainty(np.asarray(coef, float)[None, :].copy(), samples, ["dH"],
-                                  list(names), samples_per_block)
+        fitted = nonnegative_fit(features, model + signs * residual, fit_block, weights)
+        offsets[r], samples[r, 0] = fitted[0], fitted[1:]
+    return DissipationUncertainty(np.asarray(coef, float)[None, :].copy(), samples, ["dH"],
+                                  list(names), samples_per_block, offsets)

@@ -88,6 +88,26 @@ def _continued(model, x, t, split):
                       "validation_restarted_at_window_start": error_summary(dh[split:], anchored)}
 
 
+def _forecast_band(model, uncertainty, x, t, split, level=0.95):
+    """The chosen law's bootstrap band over the validation window (training fit continued):
+    the band, the fraction of the window's measured dH inside it, the band at the window's
+    end and the validation error of every resampled law, in % of the window's dH range."""
+    curves = model.resampled_predictions_states(x, t, uncertainty, continued=True)[:, split:]
+    dh = model.measured_delta_h(x)[split:]
+    tail = (1 - level) / 2
+    low, high = np.quantile(curves, [tail, 1 - tail], axis=0)
+    scale = 100 / np.ptp(dh)
+    errors = np.max(np.abs(curves - dh), axis=1) * scale
+    summary = {"level": level,
+               "validation_inside_band_fraction": float(np.mean((low <= dh) & (dh <= high))),
+               "band_at_window_end_percent_of_range": [float((low[-1] - dh[-1]) * scale),
+                                                       float((high[-1] - dh[-1]) * scale)],
+               "validation_error_of_resampled_laws_percent_of_range": dict(zip(
+                   ("2.5 %", "median", "97.5 %"),
+                   np.percentile(errors, [2.5, 50, 97.5]).tolist(), strict=True))}
+    return (low, high), summary
+
+
 def _file_law_model(pend, x, t, split):
     """The rig file's viscous law k1 dphi1^2 + k2 (dphi1 - dphi2)^2 with a fitted offset."""
     dh = EnergyDiscrepancy(pend.energy).measured_delta_h(x)
@@ -117,10 +137,12 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
     chosen = min(table, key=lambda name: table[name]["forecast_median_percent_of_range"])
     model = fitted[chosen]
     dh, pred, errors = _continued(model, x, t, split)
-    low, high = model.bootstrap(rec.angles[:rec.split_index], rec.t[:rec.split_index]).interval()
+    uncertainty = model.bootstrap(rec.angles[:rec.split_index], rec.t[:rec.split_index])
+    low, high = uncertainty.interval()
     errors["bootstrap_95_percent_intervals"] = {
         term.name: [float(lo), float(hi)] for term, lo, hi in zip(model.terms_, low[0], high[0],
                                                                    strict=True)}
+    band, errors["forecast_band"] = _forecast_band(model, uncertainty, x, t, split)
     file_pred, file_errors = _file_law_model(pend, x, t, split)
     rep.results.update({
         "parameters": params.as_dict(), "split_time_s": rec.split_time,
@@ -135,7 +157,7 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
     rep.results["state_form"] = _state_form(
         pend.energy, rec.angles[:rec.split_index], rec.t[:rec.split_index],
         {"validation (continued recording, same E0)": (rec.angles, rec.t)}, REAL_SMOOTHING)
-    _experiment_report(rep, fitted, pend, x, t, split, (dh, pred), file_pred)
+    _experiment_report(rep, fitted, pend, x, t, split, (dh, pred, band), file_pred)
     return rep.write()
 
 
@@ -245,7 +267,7 @@ def _procedure_section(rep, pend, x, t, split):
 def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
     from ..plots.energy import energy_figure, fit_figure, friction_law_figure
 
-    dh, pred = fitted
+    dh, pred, (low, high) = fitted
     main, rig = rep.results["dissipation_form"], rep.results["rig_file_viscous_law"]
     rep.text(f"## The chosen model\n`{model.equation()}`")
     rep.table(["term", "coefficient", "unit", "95 % interval (wild block bootstrap, 1 s)"],
@@ -265,6 +287,20 @@ def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
     rep.text("Restarted at the measured dH where validation begins, the chosen model's error "
              "is {:.3g} % of the window's range.".format(
                  main["validation_restarted_at_window_start"]["max_abs_percent_of_range"]))
+    band = main["forecast_band"]
+    spread = band["validation_error_of_resampled_laws_percent_of_range"]
+    rep.text("**How certain the forecast is.** Each bootstrap resample of the training fit "
+             "(the intervals above) continues to its own forecast. Their 95 % band holds "
+             f"{100 * band['validation_inside_band_fraction']:.0f} % of the validation window's "
+             "measured dH; at the window's end it runs from "
+             "{:.3g} % to {:.3g} % of the window's range around the measurement. ".format(
+                 *band["band_at_window_end_percent_of_range"])
+             + "The resampled laws' validation errors range from {:.3g} % to {:.3g} % "
+             "(median {:.3g} %). ".format(spread["2.5 %"], spread["97.5 %"], spread["median"])
+             + ("So with this recording's noise the law's own coefficient uncertainty, before "
+                "any doubt about which terms to use, moves a forecast of this window across "
+                f"the {VALIDATION_BAR:g} % bar." if spread["2.5 %"] < VALIDATION_BAR
+                < spread["97.5 %"] else "The fit's own noise does not decide the bar."))
     k_eq = _equivalent_viscous(model, x, t)
     rep.results["equivalent_viscous_coefficients_N_m_s"] = k_eq
     p = pend.parameters
@@ -285,6 +321,8 @@ def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
         panels.append({"t": t[sl], "delta_h": dh[sl], "model": pred[sl], "label": label,
                        "error": percent_error(dh[sl], pred[sl], normaliser=norm),
                        "error_label": f"error (% of {'max|dH|' if norm == 'max' else 'dH range'})"})
+    panels[1]["error_band"] = [percent_error(dh[split:], edge, normaliser="range")
+                               for edge in (high, low)]
     rep.figure(fit_figure(panels, title=model.equation()), "fit.png",
                "dH and the dissipation model (cf. paper Figs. 4b,c and 5)")
     laws = {"learned": list(zip(model.terms_, model.coef_, strict=True)),
