@@ -82,6 +82,9 @@ def test_measured_swing(tmp_path):
     assert main["training"]["max_abs_percent_of_max"] <= 3.0
     for key in ("validation_continued", "validation_restarted_at_window_start"):
         assert np.isfinite(main[key]["max_abs_percent_of_range"])
+    # the bar on the validation window (continuing from the training fit)
+    assert main["validation_continued"]["max_abs_percent_of_range"] <= pm.VALIDATION_BAR
+    assert sum(main["share_of_training_loss_percent"].values()) == pytest.approx(100)
     for term in main["identified_terms"]:
         low, high = main["bootstrap_95_percent_intervals"][term["name"]]
         assert 0 <= low <= term["coefficient"] <= high
