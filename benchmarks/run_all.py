@@ -15,7 +15,8 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).parent
-BENCHES = ["bench_fit", "bench_simulate", "bench_streaming", "bench_dask", "bench_dequantise"]
+BENCHES = ["bench_fit", "bench_simulate", "bench_streaming", "bench_dask", "bench_dequantise",
+           "bench_block_fit"]
 BIG = {"bench_streaming", "bench_dask"}
 
 
