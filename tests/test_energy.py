@@ -47,41 +47,45 @@ def test_integrated_powers_of_constant_speeds():
     np.testing.assert_allclose(integral, expected, rtol=1e-12, atol=1e-300)
 
 
-def test_dissipation_fit_recovers_viscous_and_coulomb_laws():
-    """Velocities of a decaying two-frequency swing; dH built from known friction laws."""
+TWO_LAWS = {"viscous joint 1": 7e-4, "Coulomb joint 2": 3e-4}
+
+
+@pytest.fixture(scope="module")
+def known_loss():
+    """Velocities of a decaying two-frequency swing (30 s, 1 kHz), the default library's
+    integrated powers along them, and the energy lost to the laws ``TWO_LAWS``."""
     t = np.arange(30001) / 1000
     decay = np.exp(-t / 15)
     v = np.column_stack([5 * decay * np.sin(4.1 * t), 7 * decay * np.sin(6.3 * t + 1)])
     terms = default_friction_library()
     features = integrated_powers(terms, v, t)
-    truth = {"viscous joint 1": 7e-4, "Coulomb joint 2": 3e-4}
     index = {term.name: i for i, term in enumerate(terms)}
-    delta_h = sum(c * features[:, index[n]] for n, c in truth.items()) + 2e-3
-    fit = fit_dissipation(features, delta_h, terms)
-    found = {term.name: c for term, c in zip(fit.terms, fit.coefficients, strict=True)}
-    assert set(found) == set(truth)
-    for name, value in truth.items():
+    return terms, features, sum(c * features[:, index[n]] for n, c in TWO_LAWS.items())
+
+
+def _found(fit) -> dict[str, float]:
+    return {term.name: c for term, c in zip(fit.terms, fit.coefficients, strict=True)}
+
+
+def test_dissipation_fit_recovers_viscous_and_coulomb_laws(known_loss):
+    terms, features, delta_h = known_loss
+    fit = fit_dissipation(features, delta_h + 2e-3, terms)
+    found = _found(fit)
+    assert set(found) == set(TWO_LAWS)
+    for name, value in TWO_LAWS.items():
         assert found[name] == pytest.approx(value, rel=1e-6)
     assert fit.offset == pytest.approx(2e-3, rel=1e-6)
 
 
-def test_block_fit_survives_pointwise_noise_of_the_energy():
+def test_block_fit_survives_pointwise_noise_of_the_energy(known_loss):
     """White noise of 0.3 mJ on dH, where a 2 s block loses 0.8 mJ at the end: losses taken
     between single samples at the block edges were off by 35 % (Coulomb); between block means
     the known laws come back within 1 %."""
-    t = np.arange(30001) / 1000
-    decay = np.exp(-t / 15)
-    v = np.column_stack([5 * decay * np.sin(4.1 * t), 7 * decay * np.sin(6.3 * t + 1)])
-    terms = default_friction_library()
-    features = integrated_powers(terms, v, t)
-    truth = {"viscous joint 1": 7e-4, "Coulomb joint 2": 3e-4}
-    index = {term.name: i for i, term in enumerate(terms)}
-    delta_h = sum(c * features[:, index[n]] for n, c in truth.items())
-    noisy = delta_h + np.random.default_rng(0).normal(0, 3e-4, len(t))
-    fit = fit_dissipation(features, noisy, terms, block=2000)
-    found = {term.name: c for term, c in zip(fit.terms, fit.coefficients, strict=True)}
-    assert set(found) == set(truth)
-    for name, value in truth.items():
+    terms, features, delta_h = known_loss
+    noisy = delta_h + np.random.default_rng(0).normal(0, 3e-4, len(delta_h))
+    found = _found(fit_dissipation(features, noisy, terms, block=2000))
+    assert set(found) == set(TWO_LAWS)
+    for name, value in TWO_LAWS.items():
         assert found[name] == pytest.approx(value, rel=0.01)
 
 
