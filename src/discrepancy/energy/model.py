@@ -190,9 +190,14 @@ class EnergyDiscrepancy:
         The band holds the noise-driven uncertainty of the chosen law's coefficients, not
         that of the choice of terms.
         """
+        x, t = self.states(q, t, dq=dq)
+        return self.predict_interval_states(x, t, uncertainty, level=level, continued=continued)
+
+    def predict_interval_states(self, x, t, uncertainty, *, level: float = 0.95,
+                                continued: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`predict_interval` from states ``x = [q, dq]`` ``(m, 2k)``."""
         if not 0 < level < 1:
             raise ParameterError(f"level must be in (0, 1); got {level!r}")
-        x, t = self.states(q, t, dq=dq)
         curves = self.resampled_predictions_states(x, t, uncertainty, continued=continued)
         tail = (1 - level) / 2
         low, high = np.quantile(curves, [tail, 1 - tail], axis=0)

@@ -118,9 +118,9 @@ def _synthetic_seed(pend, seed, t):
 def _band_coverage(model, uncertainty, q, x_exact, t) -> float:
     """Fraction of a new swing's true energy loss (``H_m`` of the exact states, from the
     first sample the model keeps) inside the model's 95 % bootstrap band."""
-    low, high = model.predict_interval(q, t, uncertainty)
-    kept = np.searchsorted(t, model.states(q, t)[1])
-    h = model.energy(x_exact[kept])
+    x, kept_t = model.states(q, t)
+    low, high = model.predict_interval_states(x, kept_t, uncertainty)
+    h = model.energy(x_exact[np.searchsorted(t, kept_t)])
     exact = h[0] - h
     return float(np.mean((low <= exact) & (exact <= high)))
 

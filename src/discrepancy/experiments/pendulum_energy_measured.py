@@ -97,9 +97,9 @@ def _forecast_band(model, uncertainty, x, t, split, level=0.95):
     of every resampled law, in % of the window's dH range. (The band is the model's; the
     measured dH also wobbles within each swing with H_m's error, which it does not hold.)"""
     curves = model.resampled_predictions_states(x, t, uncertainty, continued=True)[:, split:]
+    low, high = (edge[split:] for edge in model.predict_interval_states(
+        x, t, uncertainty, level=level, continued=True))
     dh = model.measured_delta_h(x)[split:]
-    tail = (1 - level) / 2
-    low, high = np.quantile(curves, [tail, 1 - tail], axis=0)
     scale = 100 / np.ptp(dh)
     errors = np.max(np.abs(curves - dh), axis=1) * scale
     summary = {"level": level,
