@@ -85,10 +85,9 @@ def test_measured_swing(tmp_path):
     # the bar on the validation window (continuing from the training fit)
     assert main["validation_continued"]["max_abs_percent_of_range"] <= pm.VALIDATION_BAR
     assert sum(main["share_of_training_loss_percent"].values()) == pytest.approx(100)
-    # the first sensitivity row is the fit above; other smoothing windows find the same terms
+    # other smoothing windows find the same terms
     rows = results["chosen_procedure_with_other_smoothing"]
-    assert rows[0]["validation_continued_percent_of_range"] == \
-        pytest.approx(main["validation_continued"]["max_abs_percent_of_range"])
+    assert len({str(r["smoothing"]) for r in rows}) == 4
     names = {t["name"] for t in main["identified_terms"]}
     assert all({t["name"] for t in r["identified_terms"]} == names for r in rows)
     for term in main["identified_terms"]:

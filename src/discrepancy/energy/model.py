@@ -10,7 +10,7 @@ from ..symbolic import feature_name
 from .dissipation import default_friction_library, fit_dissipation, integrated_powers
 from .hamiltonian import check_span
 from .metrics import error_summary
-from .uncertainty import DissipationUncertainty, bootstrap_dissipation
+from .uncertainty import DissipationUncertainty, bootstrap_dissipation, quantile_band
 
 FORMS = ("dissipation", "state")
 
@@ -196,12 +196,8 @@ class EnergyDiscrepancy:
     def predict_interval_states(self, x, t, uncertainty, *, level: float = 0.95,
                                 continued: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`predict_interval` from states ``x = [q, dq]`` ``(m, 2k)``."""
-        if not 0 < level < 1:
-            raise ParameterError(f"level must be in (0, 1); got {level!r}")
-        curves = self.resampled_predictions_states(x, t, uncertainty, continued=continued)
-        tail = (1 - level) / 2
-        low, high = np.quantile(curves, [tail, 1 - tail], axis=0)
-        return low, high
+        return quantile_band(
+            self.resampled_predictions_states(x, t, uncertainty, continued=continued), level)
 
     def resampled_predictions_states(self, x, t, uncertainty, *,
                                      continued: bool = False) -> np.ndarray:

@@ -30,7 +30,7 @@ class DissipationUncertainty(CoefficientUncertainty):
             carries the uncertainty of where that fit hands over.
     """
 
-    offsets: np.ndarray | None = None
+    offsets: np.ndarray
 
     def curves(self, features: np.ndarray, *, continued: bool) -> np.ndarray:
         """Every resample's model ``dH`` (J), ``(R, m)``, from the terms' integrated powers
@@ -38,6 +38,15 @@ class DissipationUncertainty(CoefficientUncertainty):
         fit continued), else starting at 0 (a new trajectory)."""
         start = self.offsets[:, None] if continued else 0.0
         return start + self.samples[:, 0, :] @ features.T
+
+
+def quantile_band(curves: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    """Pointwise ``level`` band ``(low, high)``, each ``(m,)``, of resampled curves ``(R, m)``."""
+    if not 0 < level < 1:
+        raise ParameterError(f"level must be in (0, 1); got {level!r}")
+    tail = (1 - level) / 2
+    low, high = np.quantile(curves, [tail, 1 - tail], axis=0)
+    return low, high
 
 
 def bootstrap_dissipation(features: np.ndarray, delta_h: np.ndarray, coef: np.ndarray,

@@ -15,7 +15,7 @@ import sympy as sp
 from tqdm import tqdm
 
 from ..differentiation import Dequantised, SavitzkyGolay
-from ..energy import EnergyDiscrepancy, EnergyTautologyWarning, percent_error
+from ..energy import EnergyDiscrepancy, EnergyTautologyWarning, error_summary, percent_error
 from ..energy.dissipation import default_friction_library
 from ..symbolic import symbol
 from ..systems.double_pendulum import DoublePendulum, DoublePendulumParameters
@@ -115,10 +115,10 @@ def _synthetic_seed(pend, seed, t):
     return runs
 
 
-def _band_coverage(model, uncertainty, q, x_exact, t) -> float:
-    """Fraction of a new swing's true energy loss (``H_m`` of the exact states, from the
-    first sample the model keeps) inside the model's 95 % bootstrap band."""
-    x, kept_t = model.states(q, t)
+def _band_coverage(model, uncertainty, x, kept_t, x_exact, t) -> float:
+    """Fraction of a new swing's true energy loss (``H_m`` of the exact states ``x_exact`` at
+    times ``t``, from the first sample the model keeps) inside the model's 95 % bootstrap band
+    along the estimated states ``x`` at ``kept_t``."""
     low, high = model.predict_interval_states(x, kept_t, uncertainty)
     h = model.energy(x_exact[np.searchsorted(t, kept_t)])
     exact = h[0] - h
@@ -145,7 +145,8 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
         uncertainty = model.bootstrap(q, t, seed=seed)
         k1_interval, k2_interval = _viscous_intervals(uncertainty)
         train = model.score(q, t, start=model.offset_)
-        val = model.score(q_val, t)
+        xv, tv = model.states(q_val, t)
+        val = error_summary(model.measured_delta_h(xv), model.predict_states(xv, tv))
         entry = {"seed": seed, "initial_state_training": x0, "initial_state_validation": x0_val,
                  "identified_terms": model.identified_terms(), "equation": model.equation(),
                  "k1": k1, "k2": k2, "k1_relative_error_percent": abs(k1 / params.k1 - 1) * 100,
@@ -156,7 +157,7 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
                      "k2_relative_error_percent": abs(k2_raw / params.k2 - 1) * 100},
                  "training": train, "validation": val,
                  "validation_true_loss_inside_95_percent_band_fraction":
-                     _band_coverage(model, uncertainty, q_val, x_val, t)}
+                     _band_coverage(model, uncertainty, xv, tv, x_val, t)}
         if seed == seeds[0] or not quick:
             entry["state_form"] = _state_form(pend.energy, q, t, {"validation": (q_val, t)})
         per_seed.append(entry)

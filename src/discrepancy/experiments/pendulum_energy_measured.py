@@ -19,6 +19,7 @@ from ..energy.dissipation import (
     integrated_powers,
     support_loss_terms,
 )
+from ..energy.uncertainty import quantile_band
 from ..errors import DataError
 from ..systems.double_pendulum import DoublePendulum, DoublePendulumParameters
 from .pendulum_energy import _file_law, _state_form, _state_form_text
@@ -99,8 +100,7 @@ def _forecast_band(model, uncertainty, x, t, split, level=0.95):
     which the band holds the measured dH averaged over 1 s. (The band is the model's; the
     measured dH also wobbles within each swing with H_m's error, which the mean removes.)"""
     curves = model.resampled_predictions_states(x, t, uncertainty, continued=True)[:, split:]
-    low, high = (edge[split:] for edge in model.predict_interval_states(
-        x, t, uncertainty, level=level, continued=True))
+    low, high = quantile_band(curves, level)
     dh = model.measured_delta_h(x)[split:]
     mean = uniform_filter1d(dh, max(1, int(round(1.0 / np.median(np.diff(t))))), mode="nearest")
     scale = 100 / np.ptp(dh)
@@ -150,6 +150,9 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
         term.name: [float(lo), float(hi)] for term, lo, hi in zip(model.terms_, low[0], high[0],
                                                                    strict=True)}
     band, errors["forecast_band"] = _forecast_band(model, uncertainty, x, t, split)
+    lost = _energy_lost_per_term(model, x[:split], t[:split])
+    errors["share_of_training_loss_percent"] = {
+        name: 100 * e / sum(lost.values()) for name, e in lost.items()}
     file_pred, file_errors = _file_law_model(pend, x, t, split)
     rep.results.update({
         "parameters": params.as_dict(), "split_time_s": rec.split_time,
@@ -161,8 +164,10 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
                              "equation": model.equation(), "offset_J": model.offset_, **errors},
         "procedures": table,
         "rig_file_viscous_law": {"k1_N_m_s": params.k1, "k2_N_m_s": params.k2, **file_errors},
-        "chosen_procedure_with_other_smoothing": _smoothing_sensitivity(
-            pend, procedures(pend)[chosen], rec)})
+        "equivalent_viscous_coefficients_N_m_s": _equivalent_viscous(model, x, t),
+        "chosen_procedure_with_other_smoothing": [
+            _sensitivity_row(REAL_SMOOTHING, model, errors),
+            *_smoothing_sensitivity(pend, procedures(pend)[chosen], rec)]})
     rep.results["state_form"] = _state_form(
         pend.energy, rec.angles[:rec.split_index], rec.t[:rec.split_index],
         {"validation (continued recording, same E0)": (rec.angles, rec.t)}, REAL_SMOOTHING)
@@ -181,18 +186,22 @@ def _fit(pend, kwargs, rec, end_time, smoothing=None):
                              **kwargs).fit(rec.angles[:end], rec.t[:end])
 
 
+def _sensitivity_row(smoothing, model, errors) -> dict:
+    return {"smoothing": smoothing, "identified_terms": model.identified_terms(),
+            "training_percent_of_max": errors["training"]["max_abs_percent_of_max"],
+            "validation_continued_percent_of_range":
+                errors["validation_continued"]["max_abs_percent_of_range"]}
+
+
 def _smoothing_sensitivity(pend, kwargs, rec) -> list[dict]:
-    """The chosen procedure refitted with other Savitzky-Golay windows: law and errors."""
+    """The chosen procedure refitted after the other Savitzky-Golay windows: law and errors."""
     rows = []
-    for smoothing in (REAL_SMOOTHING, *OTHER_SMOOTHINGS):
+    for smoothing in OTHER_SMOOTHINGS:
         x, t = EnergyDiscrepancy(differentiation_method=_smoother(smoothing)).states(
             rec.angles, rec.t)
         model = _fit(pend, kwargs, rec, rec.split_time, smoothing)
         errors = _continued(model, x, t, int(np.searchsorted(t, rec.split_time)))[2]
-        rows.append({"smoothing": smoothing, "identified_terms": model.identified_terms(),
-                     "training_percent_of_max": errors["training"]["max_abs_percent_of_max"],
-                     "validation_continued_percent_of_range":
-                         errors["validation_continued"]["max_abs_percent_of_range"]})
+        rows.append(_sensitivity_row(smoothing, model, errors))
     return rows
 
 
@@ -225,18 +234,20 @@ def _compare_procedures(pend, rec, x, t, split, origins):
     return table, fitted
 
 
+def _energy_lost_per_term(model, x, t) -> dict[str, float]:
+    """Energy (J) each learned term dissipates along states ``x`` at times ``t``."""
+    names = [*model.position_names, *model.velocity_names]
+    lost = integrated_powers(model.terms_, x, t, names)[-1] * model.coef_
+    return dict(zip((term.name for term in model.terms_), lost.tolist(), strict=True))
+
+
 def _equivalent_viscous(model, x, t) -> dict[str, float]:
     """Per joint, the viscous coefficient (N m s) dissipating what the learned laws of that
     joint dissipate over the recording: ``int P_joint dt / int w^2 dt``."""
     speeds = {"joint 1": x[:, 2], "joint 2": x[:, 2] - x[:, 3]}
-    names = [*model.position_names, *model.velocity_names]
-    out = {}
-    for joint, w in speeds.items():
-        terms = [(term, c) for term, c in zip(model.terms_, model.coef_, strict=True)
-                 if term.name.endswith(joint)]
-        lost = sum(c * integrated_powers([term], x, t, names)[-1, 0] for term, c in terms)
-        out[joint] = float(lost / np.trapezoid(w ** 2, t))
-    return out
+    lost = _energy_lost_per_term(model, x, t)
+    return {joint: sum(e for name, e in lost.items() if name.endswith(joint))
+            / float(np.trapezoid(w ** 2, t)) for joint, w in speeds.items()}
 
 
 def _block_rates(t, curves, seconds=4.0):
@@ -249,6 +260,8 @@ def _block_rates(t, curves, seconds=4.0):
         for name, y in curves.items():
             rates[name].append(np.polyfit(t[sel], y[sel], 1)[0])
     return np.array(centres), {k: np.array(v) for k, v in rates.items()}
+
+
 def _experiment_report(rep, models, pend, x, t, split, fitted, file_pred):
     model = models[rep.results["chosen_procedure"]]
     rep.text(f"80 s at 1 kHz; training 0-{rep.results['split_time_s']:.3f} s, validation after. "
@@ -294,10 +307,6 @@ def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
     dh, pred, (low, high) = fitted
     main, rig = rep.results["dissipation_form"], rep.results["rig_file_viscous_law"]
     rep.text(f"## The chosen model\n`{model.equation()}`")
-    names = [*model.position_names, *model.velocity_names]
-    lost = integrated_powers(model.terms_, x[:split], t[:split], names)[-1] * model.coef_
-    main["share_of_training_loss_percent"] = dict(zip(
-        (term.name for term in model.terms_), (100 * lost / lost.sum()).tolist(), strict=True))
     rep.table(["term", "coefficient", "unit", "95 % interval (wild block bootstrap, 1 s)",
                "share of the energy lost in training (%)"],
               [[term.name, c, term.unit, "[{:.4g}, {:.4g}]".format(
@@ -357,8 +366,7 @@ def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
                           for term in r["identified_terms"]),
                 r["training_percent_of_max"], r["validation_continued_percent_of_range"]]
                for r in rep.results["chosen_procedure_with_other_smoothing"]])
-    k_eq = _equivalent_viscous(model, x, t)
-    rep.results["equivalent_viscous_coefficients_N_m_s"] = k_eq
+    k_eq = rep.results["equivalent_viscous_coefficients_N_m_s"]
     p = pend.parameters
     rep.text("Compared with the rig file's viscous law: the learned joint laws dissipate over "
              "the recording what viscous coefficients of "
