@@ -28,12 +28,15 @@ def vdp_files(tmp_path, vdp_data):
 def test_fit_show_simulate_round_trip(vdp_files, vdp_validation, capsys):
     d = vdp_files
     assert main(["fit", "--data", str(d / "run.csv"), "--prior", f"{d / 'prior.py'}:f_m",
-                 "--library", "poly(3)", "--window", "31", "--out", str(d / "m.json")]) == 0
+                 "--library", "poly(3)", "--differentiation", "savitzky_golay(window_length=31)",
+                 "--optimizer", "stlsq(threshold=0.05)", "--out", str(d / "m.json")]) == 0
     out = capsys.readouterr().out
     assert "(x2)' = prior + 0.4" in out
     doc = json.loads((d / "m.json").read_text())
     names = ["1", "x1", "x2"]
     assert doc["state_names"] == ["x1", "x2"] and len(doc["features"]) == 10 and names
+    assert doc["differentiation_method"] == {"name": "savitzky_golay", "params": {
+        "window_length": 31, "polyorder": 3, "smooth": True}}
     assert main(["show", str(d / "m.json"), "--latex"]) == 0
     assert "x_{1}^{2} x_{2}" in capsys.readouterr().out
     assert main(["simulate", "--model", str(d / "m.json"), "--prior", f"{d / 'prior.py'}:f_m",
@@ -47,8 +50,34 @@ def test_errors_are_reported_not_raised(vdp_files, capsys):
     d = vdp_files
     assert main(["fit", "--data", str(d / "run.csv"), "--library", "poly(3)+"]) == 2
     assert "library spec" in capsys.readouterr().err
-    assert main(["simulate", "--model", str(d / "run.csv"), "--x0", "1,2", "--t", "0:1:0.1"]) == 2
+    assert main(["simulate", "--model", str(d / "run.csv"), "--x0", "1,2", "--t", "0:1:0.1"]) == 1
     assert "model file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("option, value, expected", [
+    ("--differentiation", "savitzky_golay(window_length=4)", "odd integer"),
+    ("--differentiation", "spline(order=9)", "order must be an integer >= 1 and <= 5"),
+    ("--differentiation", "bogus", "valid names"),
+    ("--optimizer", "stlsq(threshold=-1)", "threshold must be"),
+    ("--optimizer", "stlsq(threshold=__import__('os'))", "literal"),
+])
+def test_fit_options_go_through_the_registries_and_constraints(vdp_files, capsys, option,
+                                                                value, expected):
+    d = vdp_files
+    assert main(["fit", "--data", str(d / "run.csv"), option, value]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and err.count("\n") == 1
+
+
+def test_threshold_auto_and_any_method_options_are_used(vdp_files, capsys):
+    d = vdp_files
+    assert main(["fit", "--data", str(d / "run.csv"), "--library", "poly(3)",
+                 "--optimizer", "stlsq(threshold=auto)", "--differentiation", "spline(s=0.1)",
+                 "--out", str(d / "m.json")]) == 0
+    doc = json.loads((d / "m.json").read_text())
+    assert doc["optimizer"]["params"]["threshold"] == "auto"
+    assert doc["differentiation_method"] == {"name": "spline",
+                                             "params": {"s": 0.1, "order": 3, "smooth": True}}
 
 
 def test_console_script_help_lists_commands():

@@ -98,7 +98,7 @@ def test_the_first_bad_value_is_located():
     x = np.zeros((10, 3))
     x[4, 2] = np.inf
     x[7, 0] = np.nan
-    with pytest.raises(DataError, match=r"x must be finite; found inf at index \(4, 2\) "
+    with pytest.raises(DataError, match=r"x must be finite; found inf at row 4, column 2 "
                                         r"\(2 non-finite values"):
         as_trajectories(x)
 

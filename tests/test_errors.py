@@ -72,7 +72,7 @@ def test_non_finite_data_in_the_second_trajectory_is_located():
     x, _ = data()
     bad = x.copy()
     bad[5, 1] = np.nan
-    with pytest.raises(DataError, match=r"x\[1\].*\(5, 1\)"):
+    with pytest.raises(DataError, match=r"x\[1\].*row 5, column 1"):
         model().fit([x, bad], t=0.01)
 
 
@@ -214,7 +214,7 @@ def test_bad_prior_output_at_predict_and_simulate():
     ([symbol("x2")], "prior must have one expression per state"),
     ([symbol("x2"), symbol("y") * 2], r"prior\[1\].*\['y'\]"),
     (["x2", "x1"], r"prior\[0\] must be a sympy expression"),
-    (42, "prior must be None, a callable"),
+    (42, "prior must be None or a callable"),
 ], ids=["count", "unknown_symbol", "strings", "number"])
 def test_bad_sympy_prior(prior, expected):
     x, _ = data()
@@ -232,8 +232,8 @@ def test_empty_library(library):
     with pytest.raises(ParameterError) as info:
         model(feature_library=library).fit(x, t=0.01)
     message = str(info.value)
-    assert type(library).__name__ in message and "library" in message
-    assert "no features" in message
+    assert type(library).__name__ in message
+    assert "no features" in message or "non-empty list" in message
 
 
 def test_library_variable_unknown():
@@ -256,7 +256,8 @@ def test_unknown_differentiation_method_lists_the_valid_ones():
 
 def test_differentiation_method_of_the_wrong_type():
     x, _ = data()
-    with pytest.raises(UnknownNameError, match="differentiation_method"):
+    with pytest.raises(ParameterError, match="differentiation_method must be None or a "
+                                             "Differentiator"):
         model(differentiation_method=np.gradient).fit(x, t=0.01)
 
 

@@ -68,7 +68,7 @@ def test_errors_name_what_is_wrong(tmp_path, arrays):
     x_nan = x.copy()
     x_nan[7, 1] = np.nan
     np.savez(tmp_path / "nan.npz", t=t, x=x_nan)
-    with pytest.raises(DataError, match=r"\(7, 1\)"):
+    with pytest.raises(DataError, match=r"row 7, column 1"):
         io.load(tmp_path / "nan.npz")
     np.savez(tmp_path / "back.npz", t=t[::-1], x=x)
     with pytest.raises(DataError, match="increasing"):

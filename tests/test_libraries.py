@@ -212,7 +212,7 @@ def test_transform_before_fit_and_wrong_columns():
                          ids=["poly_degree0_nobias", "custom_no_expressions",
                               "custom_no_functions"])
 def test_empty_library_is_refused(make):
-    with pytest.raises(ParameterError, match="at least one column"):
+    with pytest.raises(ParameterError, match="at least one column|non-empty"):
         make().fit(NAMES)
 
 
@@ -220,7 +220,7 @@ def test_bad_library_parameters():
     for lib in (dc.PolynomialLibrary(degree=-1), dc.PolynomialLibrary(degree=1.5),
                 dc.FourierLibrary(n_frequencies=0),
                 dc.FourierLibrary(include_sin=False, include_cos=False),
-                dc.CustomLibrary(expressions=[x1], functions={"f": np.abs}),
+                dc.CustomLibrary(functions={"log": np.log1p}),  # would shadow sympy's log
                 dc.CustomLibrary(functions={"not a name": np.abs})):
         with pytest.raises(ParameterError):
             lib.fit(NAMES)

@@ -31,6 +31,8 @@ class Estimator:
     _parameter_constraints: ClassVar[dict] = {}
     #: what to call before methods that need a fit, for the NotFittedError message
     _fit_hint: ClassVar[str] = "fit"
+    #: the attribute that marks a fit (None: any attribute ending in ``_``)
+    _fitted_attribute: ClassVar[str | None] = None
 
     @classmethod
     def _param_defaults(cls) -> dict:
@@ -93,9 +95,13 @@ class Estimator:
         """Hook: checks that tie several arguments together (after the declared ones)."""
 
     def check_is_fitted(self) -> None:
-        """Raise NotFittedError unless the object holds fitted state (attributes ending
-        in ``_``)."""
-        if not any(k.endswith("_") and not k.startswith("__") for k in vars(self)):
+        """Raise NotFittedError unless the object holds fitted state (``_fitted_attribute``,
+        or any attribute ending in ``_``)."""
+        if self._fitted_attribute is not None:
+            fitted = hasattr(self, self._fitted_attribute)
+        else:
+            fitted = any(k.endswith("_") and not k.startswith("__") for k in vars(self))
+        if not fitted:
             raise NotFittedError(f"this {type(self).__name__} is not fitted yet; call "
                                  f"{self._fit_hint} first")
 

@@ -13,44 +13,79 @@ EPILOG = """examples:
   discrepancy reproduce all --out out/
   discrepancy reproduce vdp-parameter --out out/
   discrepancy fit --data run.csv --prior my_model.py:f_m --library "poly(3)+fourier(1)" \\
-      --differentiation savitzky_golay --window 21 --threshold 0.05 --out model.json
+      --differentiation "savitzky_golay(window_length=21)" --optimizer "stlsq(threshold=0.05)" \\
+      --out model.json
   discrepancy simulate --model model.json --prior my_model.py:f_m --x0=-0.2,-0.3 --t 0:25:0.01 \\
       --out trajectory.csv
   discrepancy show model.json --latex
+
+--prior FILE.py:NAME imports (runs) FILE.py as Python code to get the function NAME: only
+name files you wrote or trust. Model files are JSON and are never run.
+Errors print one line on stderr and exit with 2 (bad arguments) or 1 (failure); --debug
+shows the traceback.
 """
 
 
 def _load_callable(spec: str):
     """``file.py:name`` or ``package.module:name``: the user's own code, imported as code."""
-    from .errors import ParameterError
+    from .errors import ParameterError, PriorError
 
     if ":" not in spec:
         raise ParameterError(f"--prior must look like module.py:function; got {spec!r}")
     module, name = spec.rsplit(":", 1)
-    if module.endswith(".py"):
-        path = Path(module)
-        if not path.exists():
-            raise FileNotFoundError(f"--prior file {module} does not exist")
-        loader = importlib.util.spec_from_file_location(path.stem, path)
-        mod = importlib.util.module_from_spec(loader)
-        loader.loader.exec_module(mod)
-    else:
-        mod = importlib.import_module(module)
-    if not hasattr(mod, name):
-        raise ParameterError(f"--prior: {module} has no attribute {name!r}")
-    return getattr(mod, name)
+    try:
+        if module.endswith(".py"):
+            path = Path(module)
+            if not path.is_file():
+                raise ParameterError(f"--prior file {module} does not exist")
+            loader = importlib.util.spec_from_file_location(path.stem, path)
+            mod = importlib.util.module_from_spec(loader)
+            loader.loader.exec_module(mod)
+        else:
+            mod = importlib.import_module(module)
+    except ParameterError:
+        raise
+    except Exception as e:  # the user's file failed to import: say which and why
+        raise PriorError(f"--prior {module} could not be imported: {type(e).__name__}: "
+                         f"{e}") from e
+    f = getattr(mod, name, None)
+    if not callable(f):
+        raise ParameterError(f"--prior: {module} has no function {name!r}")
+    return f
 
 
-def _floats(text: str) -> np.ndarray:
-    return np.array([float(v) for v in text.split(",")])
+MAX_TIMES = 10_000_000   # output samples a command-line simulation may ask for
+
+
+def _floats(option: str, text: str) -> np.ndarray:
+    from .errors import ParameterError
+
+    try:
+        values = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise ParameterError(f"{option} must be comma-separated numbers; got {text!r}") from None
+    if not np.all(np.isfinite(values)):
+        raise ParameterError(f"{option} must be finite numbers; got {text!r}")
+    return values
 
 
 def _times(text: str) -> np.ndarray:
-    """``start:stop:step`` (stop included) or a comma list."""
-    if ":" in text:
-        start, stop, step = (float(v) for v in text.split(":"))
-        return np.arange(start, stop + step / 2, step)
-    return _floats(text)
+    """``start:stop:step`` (stop included) or a comma list, checked before allocating."""
+    from .errors import ParameterError
+
+    if ":" not in text:
+        return _floats("--t", text)
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise ParameterError(f"--t must be start:stop:step or comma-separated times; got {text!r}")
+    start, stop, step = _floats("--t", ",".join(parts))
+    if step <= 0 or stop <= start:
+        raise ParameterError(f"--t {text!r}: need step > 0 and stop > start")
+    count = (stop - start) / step + 1
+    if count > MAX_TIMES:
+        raise ParameterError(f"--t {text!r} asks for {count:.3g} output samples; at most "
+                             f"{MAX_TIMES:.0e} (use a larger step)")
+    return start + step * np.arange(int(np.floor(count + 1e-9)))
 
 
 def cmd_reproduce(args) -> int:
@@ -79,21 +114,15 @@ def cmd_reproduce(args) -> int:
 
 
 def cmd_fit(args) -> None:
-    from . import STLSQ, DiscrepancyModel
-    from .differentiation import get_differentiation_method
+    from . import DiscrepancyModel
     from .io import load
-    from .libraries.spec import parse_library
 
     data = load(args.data, states=args.states.split(",") if args.states else None,
                 inputs=args.inputs.split(",") if args.inputs else None)
-    method_kw = {}
-    if args.differentiation == "savitzky_golay":
-        method_kw = dict(window_length=args.window, polyorder=args.polyorder)
     model = DiscrepancyModel(
         prior=_load_callable(args.prior) if args.prior else None,
-        feature_library=parse_library(args.library),
-        optimizer=STLSQ(threshold=args.threshold, alpha=args.alpha),
-        differentiation_method=get_differentiation_method(args.differentiation, **method_kw),
+        feature_library=args.library, optimizer=args.optimizer,
+        differentiation_method=args.differentiation,
         state_names=data.state_names, input_names=data.input_names or None)
     t = data.t if data.t is not None else args.dt
     model.fit(data.x, t=t, u=data.u)
@@ -102,12 +131,31 @@ def cmd_fit(args) -> None:
     print(f"saved {args.out}")
 
 
-def cmd_simulate(args) -> None:
-    from . import load_model
+def _placeholder_prior(x, u=None):
+    return np.zeros_like(x)
 
-    model = load_model(args.model, prior=_load_callable(args.prior) if args.prior else None)
+
+def _stored(path):
+    """A model file's content and whether its prior is a callable (not stored)."""
+    from .models.model_file import read_json
+
+    doc = read_json(path)
+    prior = doc.get("prior") if isinstance(doc, dict) else None
+    return doc, isinstance(prior, dict) and prior.get("kind") == "callable"
+
+
+def cmd_simulate(args) -> None:
+    from . import DiscrepancyModel
+
+    doc, needs_prior = _stored(args.model)
+    if needs_prior and not args.prior:
+        from .errors import ParameterError
+        raise ParameterError("--prior is required: the model was fitted with a Python prior, "
+                             "which model files never store as code")
+    model = DiscrepancyModel.from_state(
+        doc, prior=_load_callable(args.prior) if args.prior else None)
     t = _times(args.t)
-    x = model.simulate(_floats(args.x0), t)
+    x = model.simulate(_floats("--x0", args.x0), t)
     table = np.column_stack([t, x])
     header = ",".join(["t", *model.state_names_])
     if args.out:
@@ -118,20 +166,20 @@ def cmd_simulate(args) -> None:
 
 
 def cmd_show(args) -> None:
-    from .models.model_file import read_model_file
+    from . import DiscrepancyModel
 
-    fields = read_model_file(args.model)
-    from . import load_model
-
-    prior = fields["prior"]
-    model = load_model(args.model, prior=(lambda x, u=None: np.zeros_like(x))
-                       if prior and prior["kind"] == "callable" else None)
-    kind = "none (plain SINDy)" if prior is None else prior["kind"]
+    doc, callable_prior = _stored(args.model)
+    functions = {name: _placeholder_prior for name in doc.get("user_functions", [])
+                 if isinstance(name, str)}  # names only: show evaluates nothing
+    model = DiscrepancyModel.from_state(doc, prior=_placeholder_prior if callable_prior
+                                        else None, functions=functions)
+    kind = "none (plain SINDy)" if model.prior is None else \
+        "Python callable" if callable_prior else "sympy"
     print(f"states {model.state_names_}, inputs {model.input_names_}, prior: {kind}")
     model.print(precision=args.precision)
     if args.latex:
-        part = "discrepancy" if prior and prior["kind"] == "callable" else None
-        print(model.to_latex(precision=args.precision, part=part))
+        part = "discrepancy" if callable_prior else None
+        print(model.to_latex(precision=max(args.precision, 1), part=part))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -148,21 +196,24 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=cmd_reproduce)
     f = sub.add_parser("fit", help="fit a model to a data file and save it as JSON")
     f.add_argument("--data", required=True, help="CSV (header row), NPZ, MAT or HDF5 file")
-    f.add_argument("--prior", help="module.py:function with f_m(x, u) -> (m, n); none = SINDy")
+    f.add_argument("--prior", help="FILE.py:NAME (imports, i.e. runs, FILE.py) or module:NAME "
+                   "with f_m(x, u) -> (m, n); none = plain SINDy")
     f.add_argument("--library", default="poly(2)", help='e.g. "poly(3)+fourier(1)"')
     f.add_argument("--states", help="comma-separated state columns/variables")
     f.add_argument("--inputs", help="comma-separated input columns/variables")
     f.add_argument("--dt", type=float, default=None, help="time step if the file has no t")
-    f.add_argument("--threshold", type=float, default=0.05)
-    f.add_argument("--alpha", type=float, default=0.05, help="ridge weight of STLSQ")
-    f.add_argument("--differentiation", default="savitzky_golay")
-    f.add_argument("--window", type=int, default=21, help="Savitzky-Golay window (odd)")
-    f.add_argument("--polyorder", type=int, default=3)
+    f.add_argument("--optimizer", default=None,
+                   help='e.g. "stlsq(threshold=0.05)" or "lasso(alpha=1e-3)" (default: the '
+                   'library\'s, STLSQ with an automatic threshold)')
+    f.add_argument("--differentiation", default=None,
+                   help='e.g. "savitzky_golay(window_length=31, polyorder=3)" or "spline(s=0.01)" '
+                   "(default: the library's)")
     f.add_argument("--out", default="model.json")
     f.set_defaults(func=cmd_fit)
     s = sub.add_parser("simulate", help="simulate a saved model")
     s.add_argument("--model", required=True)
-    s.add_argument("--prior", help="module.py:function, if the model was fitted with one")
+    s.add_argument("--prior", help="FILE.py:NAME (imports, i.e. runs, FILE.py), if the model "
+                   "was fitted with a Python prior")
     s.add_argument("--x0", required=True,
                    help="comma-separated initial state; write --x0=-0.2,-0.3 "
                    "when it starts with a minus")
@@ -178,14 +229,29 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    from .errors import DiscrepancyError
+    """Run the command line; returns the exit code (0 success, 1 failure, 2 bad arguments)."""
+    from .errors import DiscrepancyError, ParameterError
 
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
+    args = parser.parse_args(argv)
     try:
         return args.func(args) or 0
-    except (DiscrepancyError, FileNotFoundError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+    except (DiscrepancyError, OSError) as e:
+        if args.debug:
+            raise
+        print(f"error: {_one_line(e)}", file=sys.stderr)
+        return 2 if isinstance(e, ParameterError) else 1
+    except Exception as e:  # a bug, or an error raised by the user's --prior code
+        if args.debug:
+            raise
+        print(f"error: {type(e).__name__}: {_one_line(e)} (rerun with --debug for the "
+              "traceback)", file=sys.stderr)
+        return 1
+
+
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split()) or type(e).__name__
 
 
 if __name__ == "__main__":

@@ -19,10 +19,11 @@ from __future__ import annotations
 import numpy as np
 
 from .accumulate import BlockAccumulator
+from .data.chunks import step_of
 from .data.trajectory import Trajectory
+from .data.validation import check_array
 from .errors import ParameterError, ShapeError, describe
 from .optimizers.gram import GramStatistics
-from .streaming import step_of
 
 SPLIT_EVERY = 8
 
@@ -40,22 +41,31 @@ def _unpack(v: np.ndarray, p: int, n: int) -> GramStatistics:
     return s
 
 
-def _block(rows, x, *rest, model, step, halo, n_total):
-    """Packed statistics ``(1, L)`` of one row block (``rows``: global row numbers)."""
+def _block(rows, x, *rest, setup, step, halo, n_total, trajectory):
+    """Packed statistics ``(1, L)`` of one row block (``rows``: global row numbers).
+
+    The block's rows are checked first (the same checks as in-memory data), so a NaN is
+    reported with its trajectory row and column, not as a non-finite sum afterwards."""
     rows = rows.ravel()
-    u = rest[0] if model.n_inputs_ else None
-    xd = rest[-1] if len(rest) > (1 if model.n_inputs_ else 0) else None
+    where = f"dask array x[{trajectory}] rows {int(rows[0])}..{int(rows[-1])}"
+    x = check_array("x", x, where=where, row_offset=int(rows[0]))
+    u = rest[0] if setup.n_inputs else None
+    xd = rest[-1] if len(rest) > (1 if setup.n_inputs else 0) else None
+    if u is not None:
+        u = check_array("u", u, where=where, row_offset=int(rows[0]))
+    if xd is not None:
+        xd = check_array("x_dot", xd, where=where, row_offset=int(rows[0]))
     t = rows * step
     if xd is None:
-        xs, xd = model.differentiation_method_(x, t)
+        xs, xd = setup.differentiation(x, t)
         lo = 0 if rows[0] == 0 else halo
         hi = len(rows) if rows[-1] == n_total - 1 else len(rows) - halo
     else:
         xs, lo, hi = x, 0, len(rows)
-    z, y = model.residual(Trajectory(t[lo:hi], xs[lo:hi], None if u is None else u[lo:hi],
+    z, y = setup.residual(Trajectory(t[lo:hi], xs[lo:hi], None if u is None else u[lo:hi],
                                      xd[lo:hi]))
-    acc = BlockAccumulator(model.feature_library_.transform, model.feature_library_.n_features_,
-                           model.n_states_, n_threads=1)
+    acc = BlockAccumulator(setup.library.transform, setup.n_features, setup.n_states,
+                           n_threads=1)
     acc.add(z, y)
     acc.finish_trajectory()
     return _pack(acc.total)[None, :]
@@ -75,41 +85,41 @@ def _as_dask(name, a, like, cols):
     return a.astype(float).rechunk((like.chunks[0], -1))
 
 
-def _trajectory_graph(model, x, u, xd, step):
+def _trajectory_graph(setup, x, u, xd, step, trajectory):
     """Dask array ``(L,)``: packed statistics of one trajectory."""
     import dask.array as da
 
     m = x.shape[0]
+    if m == 0:
+        raise ShapeError(f"x[{trajectory}] has no rows")
     x = x.astype(float).rechunk({1: -1})
     rows = da.arange(m, chunks=(x.chunks[0],))[:, None].astype(float)
     args = [a for a in (x, u, xd) if a is not None]
-    p, n = model.feature_library_.n_features_, model.n_states_
+    p, n = setup.n_features, setup.n_states
     out_chunks = (1, p * p + p * n + n + 1)
-    halo = 0
+    common = dict(setup=setup, step=step, n_total=m, trajectory=trajectory,
+                  meta=np.empty((0, 0)), dtype=float, chunks=out_chunks)
     if xd is None:
-        halo = model.differentiation_method_.halo
+        halo = setup.differentiation.halo
         if halo is None:
-            raise ParameterError(f"{model.differentiation_method_!r} is a global method; Dask "
+            raise ParameterError(f"{setup.differentiation!r} is a global method; Dask "
                                  "fits need a local one (FiniteDifference, SavitzkyGolay) or x_dot")
-        need = max(model.differentiation_method_.min_samples, 2 * halo + 1)
+        need = max(setup.differentiation.min_samples, 2 * halo + 1)
         if min(x.chunks[0]) < need:
             size = max(need, m // max(1, len(x.chunks[0])))
             x = x.rechunk({0: size})
             rows = rows.rechunk({0: x.chunks[0]})
             args = [a.rechunk({0: x.chunks[0]}) for a in [x, *args[1:]]]
         blocks = da.map_overlap(_block, rows, *args, depth={0: halo, 1: 0}, boundary="none",
-                                trim=False, align_arrays=False, dtype=float,
-                                chunks=out_chunks, model=model, step=step, halo=halo,
-                                n_total=m, meta=np.empty((0, 0)))
+                                trim=False, align_arrays=False, halo=halo, **common)
     else:
-        blocks = da.map_blocks(_block, rows, *args, dtype=float, chunks=out_chunks,
-                               model=model, step=step, halo=0, n_total=m,
-                               meta=np.empty((0, 0)))
+        blocks = da.map_blocks(_block, rows, *args, halo=0, **common)
     return blocks.sum(axis=0, split_every=SPLIT_EVERY)
 
 
-def fit_dask(model, x, *, t=None, u=None, x_dot=None):
-    """``model.fit`` on dask arrays (``x`` one array or a list, one per trajectory)."""
+def dask_statistics(model, x, *, t=None, u=None, x_dot=None):
+    """``(setup, stats)`` of dask arrays for ``model.fit`` (``x`` one array or a list, one
+    per trajectory)."""
     xs = list(x) if isinstance(x, (list, tuple)) else [x]
     us = _per_trajectory("u", u, len(xs))
     xds = _per_trajectory("x_dot", x_dot, len(xs))
@@ -117,17 +127,16 @@ def fit_dask(model, x, *, t=None, u=None, x_dot=None):
         raise ShapeError(f"x must be 2-D (samples, states); got {describe(xs[0])}")
     n = xs[0].shape[1]
     r = 0 if us[0] is None else (1 if np.ndim(us[0]) == 1 else us[0].shape[1])
-    model._setup(n, r)
+    setup = model.make_setup(n, r)
     step = step_of(t)
     graphs = []
     for k, (xk, uk, xdk) in enumerate(zip(xs, us, xds, strict=True)):
         if xk.ndim != 2 or xk.shape[1] != n:
             raise ShapeError(f"x[{k}] must have shape (m, {n}); got {describe(xk)}")
-        graphs.append(_trajectory_graph(model, xk, _as_dask("u", uk, xk, r or None),
-                                        _as_dask("x_dot", xdk, xk, n), step))
+        graphs.append(_trajectory_graph(setup, xk, _as_dask("u", uk, xk, r or None),
+                                        _as_dask("x_dot", xdk, xk, n), step, k))
     (total,) = _compute(sum(graphs[1:], graphs[0]))
-    p = model.feature_library_.n_features_
-    return model._fit_statistics(_unpack(np.asarray(total), p, n))
+    return setup, _unpack(np.asarray(total), setup.n_features, n)
 
 
 def _compute(graph):
@@ -162,11 +171,16 @@ def _per_trajectory(name, value, k):
     return [value] * k
 
 
-def _source_stats(model, source, step):
+def _source_stats(setup, source, step):
     from .streaming import stream_statistics
 
-    return _pack(stream_statistics(model, source, step, progress=False, setup=False,
-                                   n_threads=1))
+    def same_layout(n, r):
+        if (n, r) != (setup.n_states, setup.n_inputs):
+            raise ShapeError(f"{n} states and {r} inputs; the first source has "
+                             f"{setup.n_states} and {setup.n_inputs}")
+        return setup
+
+    return _pack(stream_statistics(source, step, same_layout, progress=False, n_threads=1)[1])
 
 
 def fit_sources(model, sources, *, t=None):
@@ -175,18 +189,17 @@ def fit_sources(model, sources, *, t=None):
     each, summed as a tree. Returns the model."""
     from dask import delayed
 
-    from .streaming import peek_layout
+    from .data.chunks import peek_layout
 
     sources = list(sources)
     if not sources:
         raise ShapeError("sources must hold at least one ChunkSource; got an empty list")
     n, r = peek_layout(sources[0])
-    model._setup(n, r)
+    setup = model.make_setup(n, r)
     step = step_of(t)
-    parts = [delayed(_source_stats)(model, s, step) for s in sources]
+    parts = [delayed(_source_stats)(setup, s, step) for s in sources]
     while len(parts) > 1:
         parts = [delayed(sum)(parts[i:i + SPLIT_EVERY]) for i in range(0, len(parts),
                                                                          SPLIT_EVERY)]
     (total,) = _compute(parts[0])
-    p = model.feature_library_.n_features_
-    return model._fit_statistics(_unpack(np.asarray(total), p, n))
+    return model.fit_statistics(_unpack(np.asarray(total), setup.n_features, n), setup)

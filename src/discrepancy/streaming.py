@@ -30,7 +30,7 @@ Memory is bounded by about two chunks plus a 4096-row block of Θ.
 """
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import replace
 
 import numpy as np
@@ -45,28 +45,12 @@ from .data.chunks import (  # noqa: F401  (Chunk, ChunkSource, peek_layout: publ
     _validated,
     as_source,
     peek_layout,
+    step_of,
 )
 from .data.trajectory import Trajectory
-from .errors import DataError, ParameterError, ShapeError
+from .errors import ParameterError, ShapeError
 
-__all__ = ["Chunk", "ChunkSource", "IterableSource", "fit_streamed", "is_streamed",
-           "stream_statistics"]
-
-
-def _is_dask(x) -> bool:
-    return type(x).__module__.split(".")[0] == "dask"
-
-
-def _is_chunk_stream(x) -> bool:
-    return isinstance(x, (Iterator, ChunkSource))
-
-
-def is_streamed(x) -> bool:
-    """True for input that :func:`fit_streamed` handles instead of the in-memory fit:
-    a dask array, an iterator of chunks, a ChunkSource, or a non-empty list of those."""
-    if isinstance(x, (list, tuple)):
-        return bool(x) and all(_is_dask(e) or _is_chunk_stream(e) for e in x)
-    return _is_dask(x) or _is_chunk_stream(x)
+__all__ = ["Chunk", "ChunkSource", "IterableSource", "chunk_statistics", "stream_statistics"]
 
 
 # ------------------------------------------------------------------ stitching
@@ -76,12 +60,12 @@ def _concat(a: Chunk, b: Chunk) -> Chunk:
                  where=b.where)
 
 
-def residual_rows(model, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """Yield ``(z, y)`` for consecutive rows of one trajectory, equal to ``model.residual``
-    of the whole trajectory (the model must be set up; chunks validated)."""
-    for xs, xd, lo, hi in _stitched(chunks, model.differentiation_method_):
+def residual_rows(setup, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Yield ``(z, y)`` for consecutive rows of one trajectory, equal to ``setup.residual``
+    of the whole trajectory (chunks validated)."""
+    for xs, xd, lo, hi in _stitched(chunks, setup.differentiation):
         if hi > lo:
-            yield model.residual(Trajectory(xs.t[lo:hi], xs.x[lo:hi], None if xs.u is None
+            yield setup.residual(Trajectory(xs.t[lo:hi], xs.x[lo:hi], None if xs.u is None
                                             else xs.u[lo:hi], xd[lo:hi]))
 
 
@@ -149,27 +133,17 @@ class _RowFeeder:
         self.acc.finish_trajectory()
 
 
-def step_of(t) -> float:
-    """The time step for chunks without times: ``t`` (a positive number) or 1."""
-    if t is None:
-        return 1.0
-    if np.ndim(t) != 0:
-        raise ParameterError("with chunked x, t must be the time step (a number); give "
-                             "per-row times inside the chunks (Chunk(x, t=...))")
-    if not np.isfinite(float(t)) or float(t) <= 0:
-        raise DataError(f"t as a time step must be a positive finite number; got {t}")
-    return float(t)
+def stream_statistics(source: ChunkSource, step: float, setup_for: Callable, *,
+                      progress: bool | None = None, n_threads: int | None = None):
+    """``(setup, stats)``: the Gram statistics of all rows of ``source``.
 
-
-def stream_statistics(model, source: ChunkSource, step: float, *, progress: bool | None = None,
-                      n_threads: int | None = None, setup: bool = True):
-    """Gram statistics of all rows of ``source``. With ``setup`` the model is set up from
-    the first chunk; otherwise it must be set up already and the chunks must match it."""
+    ``setup_for(n_states, n_inputs)`` gives the :class:`~discrepancy.models.setup.FitSetup`
+    once the first chunk shows the layout (e.g. ``model.make_setup``); every later
+    trajectory must have the same layout.
+    """
     from tqdm.auto import tqdm
 
-    acc = feeder = layout = None
-    if not setup:
-        layout = _Layout(model.n_states_, model.n_inputs_, None)
+    setup = acc = feeder = layout = None
     with tqdm(total=source.n_samples, unit=" samples", unit_scale=True, desc="fit",
               disable=None if progress is None else not progress) as bar:
         for k, items in enumerate(source.trajectories()):
@@ -177,16 +151,10 @@ def stream_statistics(model, source: ChunkSource, step: float, *, progress: bool
             first = next(stream, None)
             if first is None:
                 raise ShapeError(f"trajectory {k} of x has no rows")
-            if acc is None:
+            if setup is None:
                 layout = first[0]
-                if setup:
-                    model._setup(layout.n, layout.r)
-                elif (layout.n, layout.r) != (model.n_states_, model.n_inputs_):
-                    raise ShapeError(f"trajectory {k}: {layout.n} states and {layout.r} inputs; "
-                                     f"the model was set up for {model.n_states_} and "
-                                     f"{model.n_inputs_}")
-                acc = BlockAccumulator(model.feature_library_.transform,
-                                       model.feature_library_.n_features_, layout.n,
+                setup = setup_for(layout.n, layout.r)
+                acc = BlockAccumulator(setup.library.transform, setup.n_features, layout.n,
                                        n_threads=n_threads)
                 feeder = _RowFeeder(acc)
 
@@ -195,12 +163,12 @@ def stream_statistics(model, source: ChunkSource, step: float, *, progress: bool
                     yield chunk
                     bar.update(chunk.n_rows)
 
-            for z, y in residual_rows(model, counted()):
+            for z, y in residual_rows(setup, counted()):
                 feeder.add(z, y)
             feeder.end_trajectory()
-    if acc is None:
+    if setup is None:
         raise ShapeError("x holds no trajectories")
-    return acc.total
+    return setup, acc.total
 
 
 def _chain(first, rest):
@@ -208,13 +176,9 @@ def _chain(first, rest):
     yield from rest
 
 
-def fit_streamed(model, x, *, t=None, u=None, x_dot=None):
-    """``model.fit`` for streamed input (see the module docstring); returns the model."""
-    if _is_dask(x) or (isinstance(x, (list, tuple)) and x and all(_is_dask(e) for e in x)):
-        from .distributed import fit_dask
-        return fit_dask(model, x, t=t, u=u, x_dot=x_dot)
+def chunk_statistics(model, x, *, t=None, u=None, x_dot=None):
+    """``(setup, stats)`` of chunked input for ``model.fit`` (see the module docstring)."""
     if u is not None or x_dot is not None:
         raise ParameterError("with chunked x, give u and x_dot inside the chunks "
                              "(Chunk(x, u=..., x_dot=...)), not as separate arguments")
-    stats = stream_statistics(model, as_source(x), step_of(t))
-    return model._fit_statistics(stats)
+    return stream_statistics(as_source(x), step_of(t), model.make_setup)

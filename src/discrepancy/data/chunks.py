@@ -14,7 +14,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import DataError, ParameterError, ShapeError, describe
+from ..errors import ParameterError, ShapeError, describe
+from .validation import check_array, check_times
 
 FIELDS = ("x", "t", "u", "x_dot")
 
@@ -116,52 +117,26 @@ class _Layout:
     has: dict
 
 
-def _check_array(name, a, chunk, offset, *, rows, cols, ndim=2):
-    try:
-        a = np.asarray(a, dtype=float)
-    except (TypeError, ValueError) as e:
-        raise ShapeError(f"{chunk.where}: {name} must be numeric; {e}") from None
-    if ndim == 2 and a.ndim == 1 and cols in (None, 1) and name == "u":
-        a = a[:, None]
-    if a.ndim != ndim or (rows is not None and a.shape[0] != rows) or \
-            (cols is not None and a.shape[1] != cols):
-        want = f"({rows if rows is not None else 'k'}" + ("" if ndim == 1 else
-                                                          f", {cols if cols else 'n'}") + ")"
-        raise ShapeError(f"{chunk.where}: {name} must have shape {want} like the chunks before "
-                         f"it; got {a.shape}")
-    bad = ~np.isfinite(a)
-    if bad.any():
-        row, *col = np.argwhere(bad)[0]
-        col_txt = f", column {int(col[0])}" if col else ""
-        raise DataError(f"{chunk.where}: {name} has a non-finite value {a[(row, *col)]} at row "
-                        f"{int(row)} of the chunk (row {offset + int(row)} of the trajectory"
-                        f"{col_txt}); {int(bad.sum())} non-finite values in this chunk. "
-                        "Nothing was fitted; clean or drop those rows first")
-    return a
+def _check(name, a, chunk, offset, *, rows, cols, ndim=2):
+    return check_array(name, a, n_rows=rows, n_cols=cols, ndim=ndim, allow_1d=name == "u",
+                       where=chunk.where, row_offset=offset)
 
 
 def _validate(chunk: Chunk, layout: _Layout, offset: int, step: float, t_last) -> Chunk:
-    x = _check_array("x", chunk.x, chunk, offset, rows=None, cols=layout.n)
+    x = _check("x", chunk.x, chunk, offset, rows=None, cols=layout.n)
     k = x.shape[0]
     for f in ("t", "u", "x_dot"):
         if (getattr(chunk, f) is None) == layout.has[f]:
             state = "has no" if layout.has[f] else "has"
             raise ShapeError(f"{chunk.where}: chunk {state} {f}, unlike the first chunk; every "
                              "chunk must carry the same fields")
-    u = None if chunk.u is None else _check_array("u", chunk.u, chunk, offset, rows=k,
-                                                  cols=layout.r)
-    xd = None if chunk.x_dot is None else _check_array("x_dot", chunk.x_dot, chunk, offset,
-                                                       rows=k, cols=layout.n)
+    u = None if chunk.u is None else _check("u", chunk.u, chunk, offset, rows=k, cols=layout.r)
+    xd = None if chunk.x_dot is None else _check("x_dot", chunk.x_dot, chunk, offset, rows=k,
+                                                 cols=layout.n)
     if chunk.t is None:
-        t = np.arange(offset, offset + k) * step
+        t = check_times("t", step, k, where=chunk.where, row_offset=offset)
     else:
-        t = _check_array("t", chunk.t, chunk, offset, rows=k, cols=None, ndim=1)
-        steps = np.diff(t if t_last is None else np.r_[t_last, t])
-        if np.any(steps <= 0):
-            i = int(np.argmax(steps <= 0))
-            raise DataError(f"{chunk.where}: t must increase strictly, also across chunks; "
-                            f"it stops increasing at row {offset + i - (t_last is None) + 1} "
-                            "of the trajectory")
+        t = check_times("t", chunk.t, k, where=chunk.where, after=t_last, row_offset=offset)
     return Chunk(x, t, u, xd, chunk.where)
 
 
@@ -196,3 +171,30 @@ def peek_layout(source: ChunkSource) -> tuple[int, int]:
         for layout, _ in _validated(items, k, 1.0, None):
             return layout.n, layout.r
     raise ShapeError("x holds no rows")
+
+
+def is_dask(x) -> bool:
+    """True for a dask collection (checked by module name: dask is never imported here)."""
+    return type(x).__module__.split(".")[0] == "dask"
+
+
+def data_kind(x) -> str:
+    """How ``fit`` receives ``x``: ``"dask"`` (dask arrays, or a list of them), ``"chunks"``
+    (an iterator of chunks, a ChunkSource, or a list of those) or ``"arrays"``."""
+    items = list(x) if isinstance(x, (list, tuple)) else [x]
+    if items and all(is_dask(e) for e in items):
+        return "dask"
+    if items and all(isinstance(e, (Iterator, ChunkSource)) for e in items):
+        return "chunks"
+    return "arrays"
+
+
+def step_of(t) -> float:
+    """The time step for chunks without times: ``t`` (a positive number) or 1."""
+    if t is None:
+        return 1.0
+    if np.ndim(t) != 0:
+        raise ParameterError("with chunked x, t must be the time step (a number); give "
+                             "per-row times inside the chunks (Chunk(x, t=...))")
+    times = check_times("t", t, 2)  # checks that the step is a positive finite number
+    return float(times[1] - times[0])

@@ -1,9 +1,10 @@
 """Validation of measured data: the one place where user arrays are checked.
 
-Every public entry point that takes data calls :func:`as_trajectories`, which
-turns ``x`` (one ``(m, n)`` array or a list of them), ``t`` (a step or an array
-of times), ``u`` and ``x_dot`` into a list of :class:`Trajectory` with float64
-arrays, or raises a :mod:`discrepancy.errors` exception naming the argument.
+Every public entry point that takes whole trajectories calls :func:`as_trajectories`
+(checks in :mod:`discrepancy.data.validation`), which turns ``x`` (one ``(m, n)`` array or
+a list of them), ``t`` (a step or an array of times), ``u`` and ``x_dot`` into a list of
+:class:`Trajectory` with float64 arrays, or raises a :mod:`discrepancy.errors` exception
+naming the argument.
 """
 from __future__ import annotations
 
@@ -11,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DataError, ShapeError, describe
+from ..errors import ShapeError, describe
+from .validation import check_array, check_finite, check_times, is_uniform  # noqa: F401
 
 
 @dataclass(frozen=True)
@@ -35,56 +37,15 @@ class Trajectory:
         return self.x.shape[0]
 
 
-def check_finite(name: str, a: np.ndarray) -> None:
-    """Raise DataError naming the first non-finite entry (row, column) of ``a``."""
-    if not np.all(np.isfinite(a)):
-        bad = np.argwhere(~np.isfinite(a))[0]
-        where = ", ".join(str(int(i)) for i in bad)
-        raise DataError(
-            f"{name} must be finite; found {a[tuple(bad)]} at index ({where}) "
-            f"({np.count_nonzero(~np.isfinite(a))} non-finite values in all)"
-        )
-
-
 def as_2d(name: str, a, *, n_rows: int | None = None, n_cols: int | None = None,
           allow_1d: bool = False) -> np.ndarray:
-    """Float64 2-D array from ``a`` with optional row/column counts, else ShapeError."""
-    try:
-        arr = np.asarray(a, dtype=float)
-    except (TypeError, ValueError) as e:
-        raise ShapeError(f"{name} must be a numeric array; got {describe(a)} ({e})") from None
-    if arr.ndim == 1 and allow_1d:
-        arr = arr[:, None]
-    if arr.ndim != 2:
-        hint = " (use a.reshape(-1, 1) for a single variable)" if arr.ndim == 1 else ""
-        raise ShapeError(f"{name} must be 2-D (samples, variables); got shape {arr.shape}{hint}")
-    if n_rows is not None and arr.shape[0] != n_rows:
-        raise ShapeError(f"{name} must have {n_rows} rows (one per sample of x); "
-                         f"got shape {arr.shape}")
-    if n_cols is not None and arr.shape[1] != n_cols:
-        raise ShapeError(f"{name} must have {n_cols} columns; got shape {arr.shape}")
-    check_finite(name, arr)
-    return arr
+    """Float64 2-D array ``(samples, variables)``, checked (see :func:`check_array`)."""
+    return check_array(name, a, n_rows=n_rows, n_cols=n_cols, allow_1d=allow_1d)
 
 
 def as_times(name: str, t, m: int) -> np.ndarray:
     """Times of ``m`` samples from a positive step or a strictly increasing array."""
-    if np.isscalar(t) or np.ndim(t) == 0:
-        dt = float(t)
-        if not np.isfinite(dt) or dt <= 0:
-            raise DataError(f"{name} as a time step must be a positive finite number; got {dt}")
-        return np.arange(m) * dt
-    times = np.asarray(t, dtype=float)
-    if times.ndim != 1 or times.shape[0] != m:
-        raise ShapeError(f"{name} must be a step or a 1-D array of {m} times (one per row of x); "
-                         f"got shape {times.shape}")
-    check_finite(name, times)
-    steps = np.diff(times)
-    if np.any(steps <= 0):
-        i = int(np.argmax(steps <= 0))
-        raise DataError(f"{name} must be strictly increasing; t[{i + 1}] = {times[i + 1]} "
-                        f"follows t[{i}] = {times[i]}")
-    return times
+    return check_times(name, t, m)
 
 
 def _as_list(name: str, value, k: int, *, broadcast: bool):
@@ -146,9 +107,3 @@ def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
         xdi = None if xds[i] is None else as_2d(f"x_dot{tag}", xds[i], n_rows=m, n_cols=n)
         out.append(Trajectory(ti, xi, ui, xdi))
     return out
-
-
-def is_uniform(t: np.ndarray, rtol: float = 1e-6) -> bool:
-    """True when the steps of ``t`` are equal to within ``rtol`` of the mean step."""
-    steps = np.diff(t)
-    return bool(np.all(np.abs(steps - steps.mean()) <= rtol * abs(steps.mean())))

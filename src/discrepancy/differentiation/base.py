@@ -11,11 +11,13 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from ..data.trajectory import is_uniform
-from ..errors import DataError, ShapeError, UnknownNameError
+from ..base import Estimator
+from ..data.validation import is_uniform
+from ..errors import DataError, ShapeError
+from ..registry import Registry
 
 
-class Differentiator(ABC):
+class Differentiator(Estimator, ABC):
     """Estimate time derivatives of sampled trajectories.
 
     Subclasses implement :meth:`_compute` and set ``uniform_only``.
@@ -41,6 +43,7 @@ class Differentiator(ABC):
 
     def __call__(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Return ``(x_smooth, x_dot)``, each ``(m, n)``, for ``x`` ``(m, n)`` at ``t`` ``(m,)``."""
+        self._validate_params()
         x = np.asarray(x, dtype=float)
         t = np.asarray(t, dtype=float)
         if x.ndim != 2 or t.shape != (x.shape[0],):
@@ -60,39 +63,17 @@ class Differentiator(ABC):
     def _compute(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Hook: smoothed x and its derivative, each (m, n)."""
 
-    def __repr__(self) -> str:
-        args = ", ".join(f"{k}={v!r}" for k, v in vars(self).items() if not k.startswith("_"))
-        return f"{type(self).__name__}({args})"
 
-
-_REGISTRY: dict[str, type[Differentiator]] = {}
-
-
-def register(name: str):
-    """Class decorator adding a differentiation method to the registry under ``name``."""
-    def add(cls):
-        _REGISTRY[name] = cls
-        return cls
-    return add
+METHODS = Registry("differentiation method", "differentiation_method", Differentiator)
+register = METHODS.register
 
 
 def available_methods() -> list[str]:
-    return sorted(_REGISTRY)
+    return METHODS.names()
 
 
 def get_differentiation_method(method=None, **kwargs) -> Differentiator:
-    """A Differentiator from an instance, a registered name (with kwargs) or ``None`` (default).
-
-    The default is second-order centred finite differences, as in PySINDy.
-    """
-    if method is None:
-        method = "finite_difference"
-    if isinstance(method, Differentiator):
-        return method
-    if isinstance(method, str):
-        if method not in _REGISTRY:
-            raise UnknownNameError(f"differentiation_method {method!r} is not known; valid names: "
-                                   f"{', '.join(available_methods())}")
-        return _REGISTRY[method](**kwargs)
-    raise UnknownNameError("differentiation_method must be a Differentiator or one of "
-                           f"{', '.join(available_methods())}; got {type(method).__name__}")
+    """A Differentiator from an instance, a registered name or spec text
+    (``"savitzky_golay(window_length=31)"``, with ``kwargs``), a ``{"name", "params"}``
+    mapping, or ``None`` (second-order centred finite differences, as in PySINDy)."""
+    return METHODS.create("finite_difference" if method is None else method, **kwargs)

@@ -17,11 +17,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..constraints import InstanceOf, Integral, Interval
 from ..errors import DataError, ParameterError, ShapeError
-from .base import Differentiator
-from .methods import SavitzkyGolay
+from .base import Differentiator, register
+from .methods import ODD_WINDOW, SavitzkyGolay
 
 
+@register("dequantised")
 class Dequantised(Differentiator):
     """Consistent reconstruction of quantised positions, then differentiation.
 
@@ -42,6 +44,10 @@ class Dequantised(Differentiator):
     """
 
     uniform_only = True
+    _parameter_constraints = {
+        "method": [None, InstanceOf(Differentiator, "a Differentiator")],
+        "window_length": [ODD_WINDOW], "polyorder": [Interval(Integral, 1, None)],
+        "iterations": [Interval(Integral, 1, None)]}
 
     def __init__(self, method: Differentiator | None = None, *, resolution, encoders=None,
                  window_length: int = 101, polyorder: int = 6, iterations: int = 30):
@@ -92,8 +98,6 @@ class Dequantised(Differentiator):
         return steps
 
     def _compute(self, x, t):
-        if not isinstance(self.iterations, (int, np.integer)) or self.iterations < 1:
-            raise ParameterError(f"iterations must be an integer >= 1; got {self.iterations!r}")
         e = self._matrix(x.shape[1])
         step = self._steps(x.shape[1])
         readings = x @ e.T

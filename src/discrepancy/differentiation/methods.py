@@ -9,8 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..constraints import Integral, Interval, Predicate, Real
 from ..errors import ParameterError
 from .base import Differentiator, register
+
+#: an odd window of at least 3 samples (Savitzky-Golay smoothers)
+ODD_WINDOW = Predicate(lambda w: isinstance(w, (int, np.integer)) and not isinstance(w, bool)
+                       and w >= 3 and w % 2 == 1, "an odd integer >= 3")
 
 
 @register("finite_difference")
@@ -39,22 +44,22 @@ class SavitzkyGolay(Differentiator):
     """
 
     uniform_only = True
+    _parameter_constraints = {"window_length": [ODD_WINDOW],
+                              "polyorder": [Interval(Integral, 1, None)], "smooth": [bool]}
 
     def __init__(self, window_length: int = 21, polyorder: int = 3, *, smooth: bool = True):
         self.window_length = window_length
         self.polyorder = polyorder
         self.smooth = smooth
 
-    def _check(self):
-        w, p = self.window_length, self.polyorder
-        if not isinstance(w, (int, np.integer)) or w < 3 or w % 2 == 0:
-            raise ParameterError(f"window_length must be an odd integer >= 3; got {w!r}")
-        if not isinstance(p, (int, np.integer)) or not 1 <= p < w:
-            raise ParameterError(f"polyorder must be an integer in [1, window_length); got {p!r}")
+    def _check_params(self):
+        if self.polyorder >= self.window_length:
+            raise ParameterError(f"SavitzkyGolay: polyorder must be below window_length "
+                                 f"({self.window_length}); got {self.polyorder}")
 
     @property
     def min_samples(self) -> int:
-        self._check()
+        self._validate_params()
         return int(self.window_length)
 
     @property
@@ -80,7 +85,7 @@ class _DerivativePackage(Differentiator):
         return methods[self._kind](**self._kwargs())
 
     def _kwargs(self) -> dict:
-        return {k: v for k, v in vars(self).items() if not k.startswith("_") and k != "smooth"}
+        return {k: v for k, v in self.get_params(deep=False).items() if k != "smooth"}
 
     def _compute(self, x, t):
         method = self._method()
@@ -100,10 +105,10 @@ class Spline(_DerivativePackage):
     """
 
     _kind = "spline"
+    _parameter_constraints = {"s": [Interval(Real, 0, None)], "order": [Interval(Integral, 1, 5)],
+                              "smooth": [bool]}
 
     def __init__(self, s: float = 0.0, order: int = 3, *, smooth: bool = True):
-        if s < 0:
-            raise ParameterError(f"s (spline smoothing) must be >= 0; got {s}")
         self.s = s
         self.order = order
         self.smooth = smooth
@@ -125,6 +130,9 @@ class TrendFiltered(_DerivativePackage):
 
     _kind = "trend_filtered"
     uniform_only = True
+    _parameter_constraints = {"order": [Interval(Integral, 0, None)],
+                              "alpha": [Interval(Real, 0, None, closed="neither")],
+                              "max_iter": [Interval(Integral, 1, None)]}
 
     def __init__(self, order: int = 0, alpha: float = 1e-2, max_iter: int = 10000):
         self.order = order
@@ -145,6 +153,8 @@ class Kalman(_DerivativePackage):
 
     _kind = "kalman"
     max_samples = 4000
+    _parameter_constraints = {"alpha": [Interval(Real, 0, None, closed="neither")],
+                              "smooth": [bool]}
 
     def __init__(self, alpha: float = 1.0, *, smooth: bool = True):
         self.alpha = alpha

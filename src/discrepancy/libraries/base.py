@@ -13,11 +13,18 @@ from collections.abc import Sequence
 import numpy as np
 import sympy as sp
 
+from ..base import Estimator
+from ..constraints import InstanceOf, Predicate
 from ..errors import NotFittedError, ParameterError, ShapeError, UnknownNameError
 from ..symbolic import feature_name, symbol
 
+#: ``variables=``: ``None`` (all) or a list of names / indices into ``z = [x, u]``
+VARIABLES = [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
+    isinstance(e, (str, int, np.integer)) and not isinstance(e, bool) for e in v),
+    "a non-empty list of variable names or indices")]
 
-class FeatureLibrary(ABC):
+
+class FeatureLibrary(Estimator, ABC):
     """Base of all libraries: ``fit(names)`` then ``transform(Z)``.
 
     ``fit`` takes the names of all variables ``z = [states..., inputs...]`` and
@@ -27,9 +34,11 @@ class FeatureLibrary(ABC):
     """
 
     def __add__(self, other: FeatureLibrary) -> FeatureLibrary:
+        _check_operand("added to", other)
         return ConcatLibrary([self, other])
 
     def __mul__(self, other: FeatureLibrary) -> FeatureLibrary:
+        _check_operand("multiplied by", other)
         return TensorLibrary(self, other)
 
     @abstractmethod
@@ -82,10 +91,11 @@ class FeatureLibrary(ABC):
         self.feature_expressions_ = expressions
         self.n_features_ = len(expressions)
 
-    def __repr__(self) -> str:
-        args = ", ".join(f"{k}={v!r}" for k, v in vars(self).items()
-                         if not k.startswith("_") and not k.endswith("_"))
-        return f"{type(self).__name__}({args})"
+
+def _check_operand(verb: str, other) -> None:
+    if not isinstance(other, FeatureLibrary):
+        raise ParameterError(f"libraries can only be {verb} libraries; got "
+                             f"{type(other).__name__}")
 
 
 class BaseLibrary(FeatureLibrary):
@@ -94,6 +104,8 @@ class BaseLibrary(FeatureLibrary):
     Args:
         variables: names or indices (into z = [x, u]) the library acts on; ``None`` = all.
     """
+
+    _parameter_constraints = {"variables": VARIABLES}
 
     def __init__(self, *, variables: Sequence[str | int] | None = None):
         self.variables = variables
@@ -113,6 +125,7 @@ class BaseLibrary(FeatureLibrary):
         return chosen
 
     def fit(self, names: Sequence[str]) -> BaseLibrary:
+        self._validate_params()
         self._index = self._select(names)
         symbols = [symbol(names[i]) for i in self._index]
         self._bind(names, self._expressions(symbols))
@@ -149,40 +162,47 @@ def _unique(expressions: list[sp.Expr]) -> list[int]:
 class ConcatLibrary(FeatureLibrary):
     """Columns of several libraries side by side (``a + b``), duplicates dropped."""
 
+    _parameter_constraints = {"libraries": [Predicate(
+        lambda v: isinstance(v, (list, tuple)) and v and all(isinstance(e, FeatureLibrary)
+                                                             for e in v),
+        "a non-empty list of feature libraries")]}
+
     def __init__(self, libraries: Sequence[FeatureLibrary]):
-        flat = []
-        for lib in libraries:
-            if not isinstance(lib, FeatureLibrary):
-                raise ParameterError(f"libraries can only be added to libraries; got "
-                                     f"{type(lib).__name__}")
-            flat += lib.libraries if isinstance(lib, ConcatLibrary) else [lib]
-        self.libraries = flat
+        self.libraries = libraries
+
+    def _parts(self) -> list[FeatureLibrary]:
+        """The libraries, nested sums flattened."""
+        return [p for lib in self.libraries
+                for p in (lib._parts() if isinstance(lib, ConcatLibrary) else [lib])]
 
     def fit(self, names):
-        exprs = [e for lib in self.libraries for e in lib.fit(names).feature_expressions_]
+        self._validate_params()
+        self._fitted_parts = self._parts()
+        exprs = [e for lib in self._fitted_parts for e in lib.fit(names).feature_expressions_]
         self._keep = _unique(exprs)
         self._bind(names, [exprs[i] for i in self._keep])
         return self
 
     def user_functions(self):
-        return {k: v for lib in self.libraries for k, v in lib.user_functions().items()}
+        return {k: v for lib in self._parts() for k, v in lib.user_functions().items()}
 
     def _transform(self, Z):
-        theta = np.hstack([lib._transform(Z) for lib in self.libraries])
+        theta = np.hstack([lib._transform(Z) for lib in self._fitted_parts])
         return theta if len(self._keep) == theta.shape[1] else theta[:, self._keep]
 
 
 class TensorLibrary(FeatureLibrary):
     """All products of a column of ``left`` and a column of ``right`` (``left * right``)."""
 
+    _parameter_constraints = {"left": [InstanceOf(FeatureLibrary, "a feature library")],
+                              "right": [InstanceOf(FeatureLibrary, "a feature library")]}
+
     def __init__(self, left: FeatureLibrary, right: FeatureLibrary):
-        if not isinstance(right, FeatureLibrary):
-            raise ParameterError(f"libraries can only be multiplied by libraries; got "
-                                 f"{type(right).__name__}")
         self.left = left
         self.right = right
 
     def fit(self, names):
+        self._validate_params()
         a = self.left.fit(names).feature_expressions_
         b = self.right.fit(names).feature_expressions_
         exprs = [ea * eb for ea in a for eb in b]

@@ -6,26 +6,45 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import sympy as sp
 
+from ..constraints import Predicate
 from ..errors import ParameterError
-from ..symbolic import IDENTIFIER, adopt, compile_numpy
-from .base import BaseLibrary
+from ..symbolic import FUNCTIONS, IDENTIFIER, adopt, compile_numpy
+from .base import VARIABLES, BaseLibrary
+
+
+def _is_function_map(value) -> bool:
+    return isinstance(value, Mapping) and bool(value) and all(
+        isinstance(k, str) and IDENTIFIER.match(k) and callable(f) for k, f in value.items())
 
 
 class CustomLibrary(BaseLibrary):
     """Columns given by the user.
 
-    Either ``expressions``: sympy expressions in the variables (build symbols with
-    :func:`discrepancy.symbolic.symbol`, or any sympy Symbol with the variable's
-    name); these are exact and export to sympy, LaTeX and CasADi. Or ``functions``:
-    a mapping ``name -> numpy function of one array`` applied to each chosen
-    variable (columns ``name(x1)``, ...); such terms cannot be exported to CasADi
-    and must be passed again to :func:`discrepancy.load_model`.
+    ``expressions``: sympy expressions in the variables (build symbols with
+    :func:`discrepancy.symbolic.symbol`, or any sympy Symbol with the variable's name);
+    exact, and exported to sympy, LaTeX and CasADi. They may call undefined sympy
+    functions (``sympy.Function("sat")(x1)``) whose numpy implementations are given in
+    ``functions``.
+
+    ``functions`` alone: a mapping ``name -> vectorised numpy function of one array``
+    applied to each chosen variable (columns ``name(x1)``, ...). Such terms have no
+    symbolic form: they are not exported to CasADi, and must be passed again to
+    :func:`discrepancy.load_model`.
 
     Args:
         expressions: sequence of sympy expressions.
-        functions: mapping of identifier names to vectorised numpy callables.
+        functions: mapping of identifier names to vectorised numpy callables; names must
+            not shadow the built-in functions (``sin``, ``log``, ...).
         variables: variables the functions act on (names or indices); ``None`` = all.
     """
+
+    _parameter_constraints = {
+        "expressions": [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0,
+                                        "a non-empty list of sympy expressions")],
+        "functions": [None, Predicate(_is_function_map,
+                                      "a non-empty mapping of identifier names to callables")],
+        "variables": VARIABLES,
+    }
 
     def __init__(self, expressions: Sequence[sp.Expr] | None = None, *,
                  functions: Mapping[str, Callable] | None = None, variables=None):
@@ -33,34 +52,33 @@ class CustomLibrary(BaseLibrary):
         self.expressions = expressions
         self.functions = functions
 
-    def _expressions(self, symbols):
-        if (self.expressions is None) == (self.functions is None):
-            raise ParameterError("CustomLibrary needs exactly one of expressions= or functions=")
-        if self.expressions is not None:
-            return self._from_expressions()
-        for name, f in self.functions.items():
-            if not (isinstance(name, str) and IDENTIFIER.match(name)) or not callable(f):
-                raise ParameterError(f"functions must map identifier names to callables; "
-                                     f"got {name!r}: {type(f).__name__}")
-        self._funcs = [(self.functions[n], j) for n in self.functions for j in range(len(symbols))]
-        return [sp.Function(n)(s) for n in self.functions for s in symbols]
-
-    def _from_expressions(self):
-        exprs = [adopt(e, self.names_all, label=f"expressions[{i}]")
-                 for i, e in enumerate(self.expressions)]
-        self._compiled = [compile_numpy(e, self.names_all) for e in exprs]
-        return exprs
-
-    def user_functions(self):
-        return dict(self.functions or {})
+    def _check_params(self):
+        if self.expressions is None and self.functions is None:
+            raise ParameterError("CustomLibrary needs expressions=, functions= or both")
+        shadowed = sorted(set(self.functions or {}) & set(FUNCTIONS))
+        if shadowed:
+            raise ParameterError(f"CustomLibrary: functions {shadowed} would shadow the built-in "
+                                 "functions of that name; give them other names (e.g. 'log1p')")
 
     def fit(self, names):
-        self.names_all = list(names)
+        self._names_all = list(names)
         return super().fit(names)
 
     def _select(self, names):
         # expressions name their own variables, so they see all of them
         return list(range(len(names))) if self.expressions is not None else super()._select(names)
+
+    def _expressions(self, symbols):
+        if self.expressions is not None:
+            exprs = [adopt(e, self._names_all, label=f"expressions[{i}]")
+                     for i, e in enumerate(self.expressions)]
+            self._compiled = [compile_numpy(e, self._names_all, self.functions) for e in exprs]
+            return exprs
+        self._funcs = [(self.functions[n], j) for n in self.functions for j in range(len(symbols))]
+        return [sp.Function(n)(s) for n in self.functions for s in symbols]
+
+    def user_functions(self):
+        return dict(self.functions or {})
 
     def _evaluate(self, Zs):
         if self.expressions is not None:

@@ -4,8 +4,9 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from ..constraints import Integral, Interval, Predicate
 from ..errors import ParameterError
-from .base import BaseLibrary
+from .base import VARIABLES, BaseLibrary
 
 
 class FourierLibrary(BaseLibrary):
@@ -20,6 +21,14 @@ class FourierLibrary(BaseLibrary):
         variables: names or indices of z = [x, u] to use; ``None`` = all.
     """
 
+    _parameter_constraints = {
+        "n_frequencies": [Interval(Integral, 1, None)],
+        "frequencies": [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0
+                                        and all(np.isfinite(float(f)) and float(f) != 0
+                                                for f in v),
+                                        "a non-empty list of finite, non-zero numbers")],
+        "include_sin": [bool], "include_cos": [bool], "variables": VARIABLES}
+
     def __init__(self, n_frequencies: int = 1, *, frequencies=None, include_sin: bool = True,
                  include_cos: bool = True, variables=None):
         super().__init__(variables=variables)
@@ -31,11 +40,8 @@ class FourierLibrary(BaseLibrary):
     def _freqs(self) -> list:
         if self.frequencies is not None:
             freqs = [sp.nsimplify(f) for f in self.frequencies]
-        elif isinstance(self.n_frequencies, (int, np.integer)) and self.n_frequencies >= 1:
-            freqs = [sp.Integer(k) for k in range(1, self.n_frequencies + 1)]
         else:
-            raise ParameterError("n_frequencies must be an integer >= 1; got "
-                                 f"{self.n_frequencies!r}")
+            freqs = [sp.Integer(k) for k in range(1, self.n_frequencies + 1)]
         if not (self.include_sin or self.include_cos):
             raise ParameterError("FourierLibrary needs include_sin or include_cos to be True")
         return freqs

@@ -6,8 +6,8 @@ from itertools import combinations, combinations_with_replacement
 import numpy as np
 import sympy as sp
 
-from ..errors import ParameterError
-from .base import BaseLibrary
+from ..constraints import Integral, Interval
+from .base import VARIABLES, BaseLibrary
 
 
 class PolynomialLibrary(BaseLibrary):
@@ -23,6 +23,9 @@ class PolynomialLibrary(BaseLibrary):
         variables: names or indices of z = [x, u] to use; ``None`` = all.
     """
 
+    _parameter_constraints = {"degree": [Interval(Integral, 0, None)], "include_bias": [bool],
+                              "interaction_only": [bool], "variables": VARIABLES}
+
     def __init__(self, degree: int = 2, *, include_bias: bool = True,
                  interaction_only: bool = False, variables=None):
         super().__init__(variables=variables)
@@ -31,9 +34,6 @@ class PolynomialLibrary(BaseLibrary):
         self.interaction_only = interaction_only
 
     def _combos(self, k: int) -> list[tuple[int, ...]]:
-        if not isinstance(self.degree, (int, np.integer)) or isinstance(self.degree, bool) \
-                or self.degree < 0:
-            raise ParameterError(f"degree must be an integer >= 0; got {self.degree!r}")
         pick = combinations if self.interaction_only else combinations_with_replacement
         start = 0 if self.include_bias else 1
         return [c for d in range(start, self.degree + 1) for c in pick(range(k), d)]

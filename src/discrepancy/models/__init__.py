@@ -1,5 +1,5 @@
-"""Discrepancy and hybrid models, their export and their files."""
-from .discrepancy_model import DiscrepancyModel
-from .model_file import load_model
+"""Discrepancy and hybrid models, their set-up, export and files."""
+from .discrepancy_model import DiscrepancyModel, load_model
+from .setup import FitSetup
 
-__all__ = ["DiscrepancyModel", "load_model"]
+__all__ = ["DiscrepancyModel", "FitSetup", "load_model"]

@@ -5,17 +5,35 @@ import copy
 
 import numpy as np
 
+from ..base import Estimator
+from ..constraints import InstanceOf, Predicate, is_callable
+from ..data.chunks import data_kind
 from ..data.trajectory import Trajectory, as_2d, as_trajectories
-from ..differentiation import get_differentiation_method
-from ..errors import NotFittedError, ShapeError
-from ..libraries import FeatureLibrary, PolynomialLibrary
-from ..optimizers import STLSQ, GramStatistics
+from ..differentiation import Differentiator
+from ..errors import DataError, ParameterError, ShapeError
+from ..libraries import FeatureLibrary
+from ..optimizers import GramStatistics, Optimizer
 from ..symbolic import compile_numpy, feature_name
-from .prior import Prior
+from .setup import FitSetup, resolve_setup
 from .simulation import integrate
 
+_SPEC = InstanceOf(str, "a spec string")
+_NAMES = [None, InstanceOf(str, "a name"),
+          Predicate(lambda v: isinstance(v, (list, tuple)) and all(isinstance(n, str) for n in v),
+                    "a list of names")]
 
-class DiscrepancyModel:
+
+def keywords_only(method: str, extra: tuple, names: str) -> None:
+    """Refuse positional arguments after ``t`` (PySINDy orders them differently, so a
+    positional call would silently mean something else)."""
+    if extra:
+        raise ParameterError(f"{method}: arguments after t ({names}) must be passed by name, "
+                             f"e.g. {method}(x, t, u=u); got {len(extra)} more positional "
+                             "argument(s). PySINDy's order is fit(x, t, x_dot, u), so a "
+                             "positional x_dot would otherwise be taken as u")
+
+
+class DiscrepancyModel(Estimator):
     """Hybrid model ``dx/dt = f_m(x, u) + g(x, u)`` with a sparse discrepancy ``g = Θ(x, u) Ξ``.
 
     Args:
@@ -23,17 +41,34 @@ class DiscrepancyModel:
             ``u`` ``(m, r)`` or ``None``), a list of ``n`` sympy expressions in the state and
             input symbols (then :meth:`to_sympy` and :meth:`to_casadi` give the whole hybrid
             model), or ``None`` for plain SINDy.
-        feature_library: candidate terms Θ (default ``PolynomialLibrary(degree=2)``).
-        optimizer: sparse regression (default ``STLSQ(threshold="auto")``: the threshold of
-            each equation chosen by BIC, so no hand tuning; pass ``STLSQ(threshold=0.1)``
-            for PySINDy's default).
-        differentiation_method: a Differentiator or registered name (default finite
-            differences); ignored when ``x_dot`` is given to :meth:`fit`.
+        feature_library: candidate terms Θ (default ``PolynomialLibrary(degree=2)``), or a
+            spec such as ``"poly(3) + fourier(1)"``.
+        optimizer: sparse regression (default ``STLSQ(threshold="auto")``: no hand tuning;
+            ``STLSQ(threshold=0.1)`` is PySINDy's default), or a spec such as ``"lasso"``.
+        differentiation_method: a Differentiator or a spec such as
+            ``"savitzky_golay(window_length=31)"`` (default finite differences); ignored
+            when ``x_dot`` is given to :meth:`fit`.
         state_names: names of the n states (default ``x1 ... xn``).
         input_names: names of the r inputs (default ``u`` for one, ``u1 ... ur`` for more).
+
+    Fitted attributes: ``coef_`` ``(n, p)``, ``setup_`` (the :class:`FitSetup` used),
+    ``statistics_`` (its Gram statistics), ``optimizer_`` (the fitted optimizer) and the
+    resolved ``state_names_``, ``input_names_``, ``prior_``, ``feature_library_``,
+    ``differentiation_method_``.
     """
 
-    def __init__(self, prior=None, feature_library: FeatureLibrary | None = None,
+    _parameter_constraints = {
+        "prior": [None, is_callable, Predicate(lambda v: isinstance(v, (list, tuple)) and v,
+                                               "a list of sympy expressions")],
+        "feature_library": [None, InstanceOf(FeatureLibrary, "a feature library"), _SPEC],
+        "optimizer": [None, InstanceOf(Optimizer, "an Optimizer"), _SPEC],
+        "differentiation_method": [None, InstanceOf(Differentiator, "a Differentiator"), _SPEC],
+        "state_names": _NAMES, "input_names": _NAMES,
+    }
+    _fit_hint = "fit(x, t)"
+    _fitted_attribute = "coef_"
+
+    def __init__(self, prior=None, feature_library: FeatureLibrary | str | None = None,
                  optimizer=None, differentiation_method=None, *, state_names=None,
                  input_names=None):
         self.prior = prior
@@ -44,85 +79,88 @@ class DiscrepancyModel:
         self.input_names = input_names
 
     # ----------------------------------------------------------------- fitting
-    def fit(self, x, t=None, u=None, x_dot=None) -> DiscrepancyModel:
+    def fit(self, x, t=None, *args, u=None, x_dot=None) -> DiscrepancyModel:
         """Learn the discrepancy from measured states.
 
         Args:
-            x: states ``(m, n)`` or a list of trajectories (never differentiated across joins).
+            x: states ``(m, n)``, a list of trajectories (never differentiated across
+                joins), a dask array, or chunks (see :mod:`discrepancy.streaming`).
             t: time step or times ``(m,)`` (or a list per trajectory); default step 1.
-            u: inputs ``(m, r)`` or a list per trajectory.
+            u: inputs ``(m, r)`` or a list per trajectory (keyword only).
             x_dot: measured derivatives ``(m, n)``; skips numerical differentiation.
 
         Returns:
             self
         """
-        from ..streaming import is_streamed
-
-        if is_streamed(x):  # dask arrays, chunk iterators and chunk sources: see streaming.py
-            from ..streaming import fit_streamed
-            return fit_streamed(self, x, t=t, u=u, x_dot=x_dot)
-        trajectories = as_trajectories(x, t, u, x_dot)
-        first = trajectories[0]
-        self._setup(first.x.shape[1], 0 if first.u is None else first.u.shape[1])
-        stats = GramStatistics(self.feature_library_.n_features_, self.n_states_)
-        for trajectory in trajectories:
-            self._accumulate(stats, trajectory)
-        return self._fit_statistics(stats)
-
-    def _setup(self, n: int, r: int) -> None:
-        """Resolve names, prior, library, optimizer and differentiation for n states, r inputs."""
-        self.state_names_ = _names("state_names", self.state_names, n, "x", one=None)
-        self.input_names_ = _names("input_names", self.input_names, r, "u", one="u")
-        self.n_states_, self.n_inputs_ = n, r
-        self.prior_ = Prior(self.prior, self.state_names_, self.input_names_)
-        library = self.feature_library if self.feature_library is not None \
-            else PolynomialLibrary(degree=2)
-        self.feature_library_ = copy.deepcopy(library).fit(self.variable_names_)
-        self.optimizer_ = copy.deepcopy(self.optimizer) if self.optimizer is not None \
-            else STLSQ(threshold="auto")
-        self.differentiation_method_ = get_differentiation_method(self.differentiation_method)
-
-    def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
-        """``(Z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m`` ``(m, n)``."""
-        if trajectory.x_dot is None:
-            xs, xd = self.differentiation_method_(trajectory.x, trajectory.t)
+        keywords_only("fit", args, "u and x_dot")
+        kind = data_kind(x)
+        if kind == "dask":
+            from ..distributed import dask_statistics
+            setup, stats = dask_statistics(self, x, t=t, u=u, x_dot=x_dot)
+        elif kind == "chunks":
+            from ..streaming import chunk_statistics
+            setup, stats = chunk_statistics(self, x, t=t, u=u, x_dot=x_dot)
         else:
-            xs, xd = trajectory.x, trajectory.x_dot
-        y = xd - self.prior_(xs, trajectory.u)
-        z = xs if trajectory.u is None else np.hstack([xs, trajectory.u])
-        return z, y
+            trajectories = as_trajectories(x, t, u, x_dot)
+            first = trajectories[0]
+            setup = self.make_setup(first.x.shape[1], 0 if first.u is None else first.u.shape[1])
+            stats = setup.new_statistics()
+            for trajectory in trajectories:
+                setup.statistics(trajectory, into=stats)
+        return self.fit_statistics(stats, setup)
 
-    def _accumulate(self, stats: GramStatistics, trajectory: Trajectory) -> None:
-        from ..accumulate import accumulate
+    def make_setup(self, n_states: int, n_inputs: int) -> FitSetup:
+        """The frozen set-up (names, prior, library, optimizer, differentiation) of this
+        model's parameters for ``n_states`` states and ``n_inputs`` inputs. Its
+        :meth:`~FitSetup.statistics` of any number of trajectories, summed, go to
+        :meth:`fit_statistics`."""
+        self._validate_params()
+        return resolve_setup(self, n_states, n_inputs)
 
-        z, y = self.residual(trajectory)
-        accumulate(stats, self.feature_library_.transform, z, y)
-
-    def _fit_statistics(self, stats: GramStatistics) -> DiscrepancyModel:
-        self.optimizer_.fit_gram(stats.gram, stats.rhs, n_samples=stats.count, yy=stats.yy)
-        self.statistics_ = stats
-        self._set_coefficients(self.optimizer_.coef_, self.feature_library_.feature_expressions_,
-                               self.feature_library_.user_functions())
+    def fit_statistics(self, stats: GramStatistics, setup: FitSetup) -> DiscrepancyModel:
+        """Fit from Gram statistics computed with ``setup`` (see :meth:`make_setup`);
+        returns self."""
+        if not isinstance(setup, FitSetup):
+            raise ParameterError(f"setup must be a FitSetup (from make_setup); got "
+                                 f"{type(setup).__name__}")
+        if (stats.p, stats.n) != (setup.n_features, setup.n_states):
+            raise ShapeError(f"stats are for {stats.p} features and {stats.n} states; the set-up "
+                             f"has {setup.n_features} and {setup.n_states}")
+        if stats.count == 0:
+            raise DataError("stats hold no samples: nothing to fit")
+        if not (np.all(np.isfinite(stats.gram)) and np.all(np.isfinite(stats.rhs))):
+            raise DataError("the library or the residual overflowed on these data (non-finite "
+                            "Gram statistics); scale the data or use a smaller library")
+        optimizer = copy.deepcopy(setup.optimizer)
+        optimizer.fit_gram(stats.gram, stats.rhs, n_samples=stats.count, yy=stats.yy)
+        self._set_fit(setup, optimizer.coef_, optimizer, stats)
         return self
 
-    def _set_coefficients(self, coef: np.ndarray, expressions, functions) -> None:
-        """Store ``coef_`` ``(n, p)`` and the term expressions; compile the active terms."""
+    def _set_fit(self, setup: FitSetup, coef, optimizer, statistics) -> None:
+        """Store the fitted state; compile the active terms (the hot path of evaluation)."""
+        self.setup_ = setup
+        self.state_names_, self.input_names_ = list(setup.state_names), list(setup.input_names)
+        self.n_states_, self.n_inputs_ = setup.n_states, setup.n_inputs
+        self.prior_, self.feature_library_ = setup.prior, setup.library
+        self.differentiation_method_ = setup.differentiation
+        self.optimizer_, self.statistics_ = optimizer, statistics
+        self.feature_expressions_ = list(setup.library.feature_expressions_)
         self.coef_ = np.asarray(coef, dtype=float)
-        self.feature_expressions_ = list(expressions)
-        self.user_functions_ = dict(functions)
         active = np.flatnonzero(np.any(self.coef_ != 0, axis=0))
+        functions = setup.library.user_functions()
         self._active_terms = [compile_numpy(self.feature_expressions_[j], self.variable_names_,
                                             functions) for j in active]
         self._active_coef = self.coef_[:, active].T
+
+    def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+        """``(Z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m`` ``(m, n)``."""
+        self.check_is_fitted()
+        return self.setup_.residual(trajectory)
 
     # --------------------------------------------------------------- evaluation
     @property
     def variable_names_(self) -> list[str]:
         return [*self.state_names_, *self.input_names_]
-
-    def check_is_fitted(self) -> None:
-        if not hasattr(self, "coef_"):
-            raise NotFittedError("this DiscrepancyModel is not fitted yet; call fit(x, t) first")
 
     def _variables(self, x, u) -> tuple[np.ndarray, np.ndarray | None]:
         self.check_is_fitted()
@@ -152,7 +190,7 @@ class DiscrepancyModel:
         x, u = self._variables(x, u)
         return self.prior_(x, u) + self._g(x if u is None else np.hstack([x, u]))
 
-    def simulate(self, x0, t, u=None, **integrator_kws) -> np.ndarray:
+    def simulate(self, x0, t, *args, u=None, **integrator_kws) -> np.ndarray:
         """Trajectory of the hybrid model from ``x0`` ``(n,)`` at times ``t`` ``(k,)``.
 
         ``u`` is an array ``(k, r)`` sampled at ``t`` (linearly interpolated, or held with
@@ -160,6 +198,7 @@ class DiscrepancyModel:
         :func:`discrepancy.models.simulation.integrate` (``method``, ``rtol``, ``atol``).
         Returns ``(k, n)``.
         """
+        keywords_only("simulate", args, "u")
         self.check_is_fitted()
         return integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,
                          n_inputs=self.n_inputs_, **integrator_kws)
@@ -181,31 +220,23 @@ class DiscrepancyModel:
 
     def equations(self, precision: int = 3) -> list[str]:
         """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``."""
-        names = self.get_feature_names()
-        out = []
-        for row in self.coef_:
-            parts = [] if self.prior is None else ["prior"]
-            for c, name in zip(row, names, strict=True):
-                if c != 0:
-                    term = f"{abs(c):.{precision}f}" + ("" if name == "1" else f" {name}")
-                    parts.append(("- " if c < 0 else "+ ") + term if parts else
-                                 ("-" if c < 0 else "") + term)
-            out.append(" ".join(parts) if parts else f"{0:.{precision}f}")
-        return out
+        from .export import equations
+        return equations(self, precision)
 
     def print(self, precision: int = 3) -> None:
         """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2``."""
         for name, eq in zip(self.state_names_, self.equations(precision), strict=True):
             print(f"({name})' = {eq}")
 
-    def score(self, x, t=None, u=None, x_dot=None, *, metric: str = "r2") -> float:
+    def score(self, x, t=None, *args, u=None, x_dot=None, metric: str = "r2") -> float:
         """Goodness of fit on data: ``"r2"`` or ``"rmse"`` of derivatives, or
         ``"trajectory"``: ``‖x_sim − x‖ / ‖x‖`` simulating from ``x[0]`` (one trajectory)."""
         from .scoring import score
+        keywords_only("score", args, "u, x_dot and metric")
         self.check_is_fitted()
         return score(self, x, t, u, x_dot, metric=metric)
 
-    def bootstrap(self, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
+    def bootstrap(self, x, t=None, *args, u=None, x_dot=None, n_resamples: int = 200,
                   block_length: int | None = None, method: str = "wild", seed: int = 0):
         """Uncertainty of every term: a block bootstrap of the fit on these data.
 
@@ -216,6 +247,7 @@ class DiscrepancyModel:
         ``std``, ``interval()``, ``inclusion_probability`` and a printable ``table()``.
         """
         from .uncertainty import bootstrap
+        keywords_only("bootstrap", args, "u, x_dot and the options")
         return bootstrap(self, x, t, u, x_dot, n_resamples=n_resamples,
                          block_length=block_length, method=method, seed=seed)
 
@@ -244,22 +276,41 @@ class DiscrepancyModel:
         from .export import to_casadi
         return to_casadi(self, part)
 
+    # ------------------------------------------------------------------- files
+    def to_state(self) -> dict:
+        """The fitted model as a JSON-compatible dict (the model file's content)."""
+        from .model_file import encode
+        self.check_is_fitted()
+        return encode(self)
+
+    @classmethod
+    def from_state(cls, state: dict, *, prior=None, functions=None) -> DiscrepancyModel:
+        """A fitted model from :meth:`to_state`'s dict, validated (nothing is evaluated).
+
+        ``prior``: the callable prior, when the state says it was one (code is never
+        stored); ``functions``: numpy functions of custom terms, by the names it lists.
+        """
+        from .model_file import decode
+        fields = decode(state, prior=prior, functions=functions)
+        model = cls(prior=fields["prior"], feature_library=fields["library"],
+                    optimizer=fields["optimizer"],
+                    differentiation_method=fields["differentiation_method"],
+                    state_names=fields["state_names"], input_names=fields["input_names"])
+        setup = model.make_setup(len(fields["state_names"]), len(fields["input_names"]))
+        optimizer = copy.deepcopy(setup.optimizer)
+        optimizer.coef_ = fields["coefficients"]
+        model._set_fit(setup, fields["coefficients"], optimizer, None)
+        return model
+
     def save(self, path) -> None:
-        """Write the fitted model as versioned JSON (terms as structured expressions)."""
-        from .model_file import save_model
-        save_model(self, path)
+        """Write the fitted model as versioned JSON (atomically: a failed write never
+        destroys an existing file)."""
+        from .model_file import write_json
+        write_json(path, self.to_state())
 
 
-def _names(arg: str, given, k: int, stem: str, *, one) -> list[str]:
-    from ..symbolic import IDENTIFIER
-
-    if given is None:
-        return [one] if k == 1 and one else [f"{stem}{i + 1}" for i in range(k)]
-    names = [given] if isinstance(given, str) else list(given)
-    if len(names) != k:
-        raise ShapeError(f"{arg} must have {k} names (one per column of the data); "
-                         f"got {len(names)}: {names}")
-    bad = [n for n in names if not isinstance(n, str) or not IDENTIFIER.match(n)]
-    if bad or len(set(names)) != len(names):
-        raise ShapeError(f"{arg} must be distinct identifiers (letters, digits, _); got {names}")
-    return names
+def load_model(path, prior=None, *, functions=None) -> DiscrepancyModel:
+    """Load a model saved with :meth:`DiscrepancyModel.save` (see :meth:`~DiscrepancyModel.
+    from_state` for ``prior`` and ``functions``)."""
+    from .model_file import read_json
+    return DiscrepancyModel.from_state(read_json(path), prior=prior, functions=functions)

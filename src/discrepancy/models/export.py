@@ -41,6 +41,10 @@ def to_sympy(model, part=None) -> list[sp.Expr]:
 
 
 def to_latex(model, precision: int = 4, part=None) -> str:
+    from ..constraints import Integral, Interval, validate_params
+
+    validate_params("to_latex", {"precision": precision},
+                    {"precision": [Interval(Integral, 1, 17)]})
     exprs = to_sympy(model, part)
     lines = []
     for name, e in zip(model.state_names_, exprs, strict=True):
@@ -77,3 +81,22 @@ def to_casadi(model, part=None):
     if model.n_inputs_ == 0:
         return ca.Function("f", [x], [xdot], ["x"], ["xdot"])
     return ca.Function("f", [x, u], [xdot], ["x", "u"], ["xdot"])
+
+
+def equations(model, precision: int = 3) -> list[str]:
+    """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``, one per state."""
+    from ..constraints import Integral, Interval, validate_params
+
+    validate_params("equations", {"precision": precision},
+                    {"precision": [Interval(Integral, 0, 16)]})
+    names = model.get_feature_names()
+    out = []
+    for row in model.coef_:
+        parts = [] if model.prior is None else ["prior"]
+        for c, name in zip(row, names, strict=True):
+            if c != 0:
+                term = f"{abs(c):.{precision}f}" + ("" if name == "1" else f" {name}")
+                parts.append(("- " if c < 0 else "+ ") + term if parts else
+                             ("-" if c < 0 else "") + term)
+        out.append(" ".join(parts) if parts else f"{0:.{precision}f}")
+    return out

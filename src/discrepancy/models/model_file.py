@@ -1,59 +1,181 @@
 """Model files: versioned JSON with terms stored as structured expressions.
 
-Nothing read from a file is evaluated as code: expressions are rebuilt node by
-node from a whitelist (:func:`discrepancy.symbolic.from_data`), names must be
-identifiers, numbers must be finite, and every shape is checked.
+:func:`encode` turns a fitted model into a JSON-compatible dict (``DiscrepancyModel.to_state``)
+and :func:`decode` checks such a dict field by field and rebuilds what
+``DiscrepancyModel.from_state`` needs. Nothing read from a file is evaluated as code:
+expressions are rebuilt node by node from a whitelist (:func:`discrepancy.symbolic.from_data`),
+components (optimizer, differentiation method) through their registries with declared
+parameter constraints, names must be identifiers, numbers finite, every shape is checked.
+Writes are atomic (temporary file in the same folder, fsync, rename).
 """
 from __future__ import annotations
 
 import json
 import math
+import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
+import sympy as sp
 
 from .. import __version__
-from ..errors import ModelFileError, ParameterError
+from ..errors import DiscrepancyError, ModelFileError, ParameterError
 from ..symbolic import IDENTIFIER, from_data, to_data
 
+_NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
 FORMAT = "discrepancy-model"
-VERSION = 1
-KEYS = {"format", "version", "written_by", "state_names", "input_names", "features",
-        "coefficients", "prior", "user_functions", "metadata"}
+VERSION = 2
+#: keys of each version (version 1 files, written before components were stored, still load)
+KEYS = {1: {"format", "version", "written_by", "state_names", "input_names", "features",
+            "coefficients", "prior", "user_functions", "metadata"}}
+KEYS[2] = KEYS[1] | {"optimizer", "differentiation_method", "fit"}
+#: larger files are refused before parsing (a model of 1000 terms x 100 states is ~2 MB)
+MAX_BYTES = 20 * 2**20
 
 
-def save_model(model, path) -> None:
-    model.check_is_fitted()
+# ------------------------------------------------------------------------ writing
+def encode(model) -> dict:
+    """The model file's content for a fitted model."""
+    from ..differentiation.base import METHODS
+    from ..optimizers.base import OPTIMIZERS
+
     if model.prior is None:
         prior = None
     elif model.prior_.is_symbolic:
         prior = {"kind": "sympy", "expressions": [to_data(e) for e in model.prior_.expressions]}
     else:
-        prior = {"kind": "callable", "name": getattr(model.prior, "__qualname__", "prior")}
-    doc = {
+        prior = {"kind": "callable", "name": getattr(model.prior, "__qualname__", "prior")[:200]}
+    stats = model.statistics_
+    return {
         "format": FORMAT, "version": VERSION, "written_by": f"discrepancy {__version__}",
         "state_names": model.state_names_, "input_names": model.input_names_,
         "features": [to_data(e) for e in model.feature_expressions_],
         "coefficients": model.coef_.tolist(), "prior": prior,
-        "user_functions": sorted(model.user_functions_),
-        "metadata": {"optimizer": repr(model.optimizer_) if hasattr(model, "optimizer_") else "",
+        "user_functions": sorted(model.feature_library_.user_functions()),
+        "optimizer": _spec_or_none(OPTIMIZERS, model.optimizer_),
+        "differentiation_method": _spec_or_none(METHODS, model.differentiation_method_),
+        "fit": {"n_samples": None if stats is None else int(stats.count)},
+        "metadata": {"optimizer": repr(model.optimizer_),
                      "feature_library": repr(model.feature_library),
-                     "differentiation_method": repr(model.differentiation_method_),
-                     "n_samples": int(getattr(getattr(model, "statistics_", None), "count", 0))},
+                     "differentiation_method": repr(model.differentiation_method_)},
     }
-    Path(path).write_text(json.dumps(doc, indent=1))
 
 
+def _spec_or_none(registry, obj):
+    try:
+        return registry.to_spec(obj)
+    except ParameterError:  # a user's own component: described in metadata only
+        return None
+
+
+def write_json(path, doc: dict) -> None:
+    """Write ``doc`` to ``path`` atomically: a failed or killed write leaves any existing
+    file as it was. Raises ModelFileError naming the path on OS errors."""
+    path = Path(path)
+    if path.is_dir():
+        raise ModelFileError(f"path {str(path)!r} is a folder; give a file name such as "
+                             f"{str(path / 'model.json')!r}")
+    text = json.dumps(doc, indent=1, allow_nan=False)
+    folder = path.parent if str(path.parent) else Path(".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    except OSError as e:
+        raise ModelFileError(f"cannot write {str(path)!r}: {e.strerror or e}") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError as e:
+        Path(tmp).unlink(missing_ok=True)
+        raise ModelFileError(f"cannot write {str(path)!r}: {e.strerror or e}; any existing "
+                             "file there is unchanged") from None
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+# ------------------------------------------------------------------------ reading
 def _fail(why: str) -> ModelFileError:
     return ModelFileError(f"model file: {why}; it is corrupted, was edited, or is not a "
                           f"{FORMAT} file")
 
 
+def read_json(path) -> dict:
+    """Parse a model file (size-limited) into a dict; :func:`decode` checks its fields."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"model file {str(path)!r} does not exist")
+    if path.stat().st_size > MAX_BYTES:
+        raise _fail(f"{path.stat().st_size} bytes is more than the {MAX_BYTES} a model file "
+                    "may have")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise _fail("not UTF-8 text") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as e:
+        raise _fail(f"not valid JSON ({e.msg} at line {e.lineno})") from None
+    except (ValueError, RecursionError) as e:  # huge integer literals, absurd nesting
+        raise _fail(f"not a usable JSON document ({type(e).__name__})") from None
+
+
+def decode(doc, *, prior=None, functions=None) -> dict:
+    """Check a model file's content and return the fields ``from_state`` needs: names,
+    coefficients ``(n, p)``, the library of stored terms, optimizer and differentiation
+    method, and the prior (the given callable, or the stored sympy expressions)."""
+    from ..libraries import CustomLibrary
+
+    version = _version(doc)
+    if version >= 2 and not (isinstance(doc["fit"], dict) and set(doc["fit"]) == {"n_samples"}
+                             and (doc["fit"]["n_samples"] is None or
+                                  type(doc["fit"]["n_samples"]) is int)):
+        raise _fail("fit must be {'n_samples': an integer or null}")
+    states, inputs = _names(doc, "state_names"), _names(doc, "input_names")
+    declared = doc["user_functions"]
+    if not isinstance(declared, list) or not all(isinstance(f, str) and IDENTIFIER.match(f)
+                                                 for f in declared):
+        raise _fail("user_functions must be a list of identifiers")
+    if not isinstance(doc["features"], list) or not doc["features"]:
+        raise _fail("features must be a non-empty list of expressions")
+    allowed = set(states) | set(inputs)
+    features = [_expression(f, f"features[{i}]", allowed, declared)
+                for i, f in enumerate(doc["features"])]
+    coef = _coefficients(doc, len(states), len(features))
+    missing = sorted(set(declared) - set(functions or {}))
+    if missing:
+        raise ParameterError(f"the model uses numpy functions {missing}; pass them as "
+                             "load_model(path, functions={name: callable})")
+    used = {n: functions[n] for n in declared}
+    return {"state_names": states, "input_names": inputs, "coefficients": coef,
+            "prior": _prior(doc["prior"], states, allowed, prior),
+            "library": CustomLibrary(features, functions=used or None),
+            "optimizer": _component(doc, "optimizer", version),
+            "differentiation_method": _component(doc, "differentiation_method", version)}
+
+
+def _version(doc) -> int:
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        got = type(doc).__name__ if not isinstance(doc, dict) else repr(doc.get("format"))[:40]
+        raise _fail(f"format is {got}, not {FORMAT!r}")
+    version = doc.get("version")
+    if type(version) is not int or version not in KEYS:
+        raise _fail(f"version {version!r:.20} is not one of {sorted(KEYS)} (a newer "
+                    "discrepancy may have written it)")
+    if set(doc) != KEYS[version]:
+        raise _fail(f"version {version} needs exactly the keys {sorted(KEYS[version])}; got "
+                    f"{sorted(map(str, doc))[:20]}")
+    return version
+
+
 def _names(doc, key) -> list[str]:
     names = doc[key]
     if not isinstance(names, list) or not all(isinstance(n, str) and IDENTIFIER.match(n)
-                                              for n in names):
-        raise _fail(f"{key} must be a list of identifiers")
+                                              for n in names) or len(set(names)) != len(names):
+        raise _fail(f"{key} must be a list of distinct identifiers")
     return names
 
 
@@ -68,96 +190,57 @@ def _coefficients(doc, n: int, p: int) -> np.ndarray:
     return np.array(rows, dtype=float).reshape(n, p)
 
 
-def read_model_file(path) -> dict:
-    """Parse and validate a model file; returns its fields with expressions rebuilt."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise _fail("not UTF-8 text") from None
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise _fail(f"not valid JSON ({e.msg} at line {e.lineno})") from None
-    except (ValueError, RecursionError) as e:  # huge integer literals, absurd nesting
-        raise _fail(f"not a usable JSON document ({type(e).__name__})") from None
-    if not isinstance(doc, dict) or set(doc) != KEYS:
-        got = sorted(doc) if isinstance(doc, dict) else type(doc).__name__
-        raise _fail(f"expected the keys {sorted(KEYS)}, got {got}")
-    if doc["format"] != FORMAT or type(doc["version"]) is not int or doc["version"] != VERSION:
-        raise _fail(f"format {doc['format']!r:.40} version {doc['version']!r:.20} is not "
-                    f"{FORMAT!r} version {VERSION}")
-    states, inputs = _names(doc, "state_names"), _names(doc, "input_names")
-    functions = doc["user_functions"]
-    if not isinstance(functions, list) or not all(isinstance(f, str) and IDENTIFIER.match(f)
-                                                  for f in functions):
-        raise _fail("user_functions must be a list of identifiers")
-    if not isinstance(doc["features"], list) or not doc["features"]:
-        raise _fail("features must be a non-empty list of expressions")
-    allowed = set(states) | set(inputs)
-    features = [_expression(f, f"features[{i}]", allowed, functions)
-                for i, f in enumerate(doc["features"])]
-    coef = _coefficients(doc, len(states), len(features))
-    return {"state_names": states, "input_names": inputs, "features": features,
-            "coefficients": coef, "prior": _prior(doc["prior"], states, allowed),
-            "user_functions": functions}
-
-
 def _expression(data, where, allowed, functions):
     expr = from_data(data, where=where, functions=functions)
     if not {s.name for s in expr.free_symbols} <= allowed:
         raise _fail(f"{where} uses variables outside {sorted(allowed)}")
+    if expr.is_number and (expr.has(*_NON_REAL) or not _finite_number(expr)):
+        raise _fail(f"{where} is the constant {str(expr)[:40]}, which is not a finite real "
+                    "number")
     return expr
 
 
-def _prior(prior, states, allowed):
-    if prior is None:
-        return None
-    if not isinstance(prior, dict) or prior.get("kind") not in ("sympy", "callable"):
+def _finite_number(expr) -> bool:
+    try:
+        return math.isfinite(complex(expr).real) and complex(expr).imag == 0
+    except (TypeError, ValueError, OverflowError):
+        return False
+
+
+def _prior(stored, states, allowed, given):
+    if stored is not None and (not isinstance(stored, dict) or
+                               stored.get("kind") not in ("sympy", "callable")):
         raise _fail("prior must be null or an object with kind 'sympy' or 'callable'")
-    expected = {"kind", "expressions"} if prior["kind"] == "sympy" else {"kind", "name"}
-    if set(prior) != expected:
-        raise _fail(f"a {prior['kind']} prior must have exactly the keys {sorted(expected)}")
-    if prior["kind"] == "callable":
-        if not isinstance(prior["name"], str) or len(prior["name"]) > 200:
-            raise _fail("a callable prior's name must be a short string")
-        return prior
-    exprs = prior["expressions"]
+    if stored is not None:
+        expected = {"kind", "expressions"} if stored["kind"] == "sympy" else {"kind", "name"}
+        if set(stored) != expected:
+            raise _fail(f"a {stored['kind']} prior must have exactly the keys {sorted(expected)}")
+    if given is not None:
+        if stored is None:
+            raise ParameterError("this model was fitted without a prior (plain SINDy); do not "
+                                 "pass one to load_model")
+        return given
+    if stored is None:
+        return None
+    if stored["kind"] == "callable":
+        raise ParameterError("this model was fitted with a Python callable prior, which files "
+                             "never store as code; pass it: load_model(path, prior=f_m)")
+    exprs = stored["expressions"]
     if not isinstance(exprs, list) or len(exprs) != len(states):
         raise _fail(f"prior expressions must be a list of {len(states)} expressions")
-    return {"kind": "sympy",
-            "expressions": [_expression(e, f"prior[{i}]", allowed, [])
-                            for i, e in enumerate(exprs)]}
+    return [_expression(e, f"prior[{i}]", allowed, []) for i, e in enumerate(exprs)]
 
 
-def load_model(path, prior=None, *, functions=None):
-    """Load a model saved with :meth:`DiscrepancyModel.save`.
+def _component(doc, key, version):
+    """A stored optimizer / differentiation method rebuilt through its registry."""
+    from ..differentiation.base import METHODS
+    from ..optimizers.base import OPTIMIZERS
 
-    Args:
-        path: the JSON file.
-        prior: the callable prior the model was fitted with (needed when the file says its
-            prior was a Python callable; a sympy prior is stored in the file itself).
-        functions: numpy functions of custom terms, by the names the file lists.
-    """
-    from .discrepancy_model import DiscrepancyModel
-
-    fields = read_model_file(path)
-    stored = fields["prior"]
-    if prior is None and stored is not None:
-        if stored["kind"] == "callable":
-            raise ParameterError("this model was fitted with a Python callable prior, which "
-                                 "files never store as code; pass it: load_model(path, "
-                                 "prior=f_m)")
-        prior = stored["expressions"]
-    missing = sorted(set(fields["user_functions"]) - set(functions or {}))
-    if missing:
-        raise ParameterError(f"the model uses numpy functions {missing}; pass them as "
-                             "load_model(path, functions={name: callable})")
-    model = DiscrepancyModel(prior=prior, state_names=fields["state_names"],
-                             input_names=fields["input_names"])
-    model._setup(len(fields["state_names"]), len(fields["input_names"]))
-    model.feature_library_ = None
-    used = {n: functions[n] for n in fields["user_functions"]}
-    model._set_coefficients(fields["coefficients"], fields["features"], used)
-    return model
-
+    if version < 2 or doc[key] is None:
+        return None
+    registry = OPTIMIZERS if key == "optimizer" else METHODS
+    try:
+        return registry.create(doc[key])
+    except DiscrepancyError as e:
+        raise _fail(f"{key}: {e}") from None
 

@@ -19,7 +19,7 @@ def score(model, x, t=None, u=None, x_dot=None, *, metric: str = "r2") -> float:
             raise ShapeError("metric='trajectory' scores one trajectory; got "
                              f"{len(trajectories)}")
         tr = trajectories[0]
-        sim = model.simulate(tr.x[0], tr.t, tr.u)
+        sim = model.simulate(tr.x[0], tr.t, u=tr.u)
         return float(np.linalg.norm(sim - tr.x) / np.linalg.norm(tr.x))
     truth, pred = [], []
     for tr in trajectories:

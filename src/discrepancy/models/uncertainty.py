@@ -127,9 +127,9 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
     from tqdm.auto import tqdm
 
     model.check_is_fitted()
-    if model.feature_library_ is None:
-        raise ParameterError("a model loaded from a file has no library to re-evaluate; "
-                             "bootstrap the model you fitted")
+    if not isinstance(n_resamples, (int, np.integer)) or isinstance(n_resamples, bool) or \
+            n_resamples < 2:
+        raise ParameterError(f"n_resamples must be an integer >= 2; got {n_resamples!r}")
     if method not in ("wild", "pairs"):
         raise ParameterError(f"method must be 'wild' or 'pairs'; got {method!r}")
     blocks, length = block_statistics(model, x, t, u, x_dot, block_length=block_length)

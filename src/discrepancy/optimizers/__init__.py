@@ -1,7 +1,8 @@
 """Sparse regression on Gram statistics."""
-from .base import Optimizer, solve_normal
+from .base import OPTIMIZERS, Optimizer, get_optimizer, solve_normal
 from .gram import GramStatistics
 from .lasso import Lasso
 from .stlsq import STLSQ
 
-__all__ = ["GramStatistics", "Lasso", "Optimizer", "STLSQ", "solve_normal"]
+__all__ = ["OPTIMIZERS", "GramStatistics", "Lasso", "Optimizer", "STLSQ", "get_optimizer",
+           "solve_normal"]

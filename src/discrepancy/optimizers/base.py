@@ -6,7 +6,9 @@ from abc import ABC, abstractmethod
 import numpy as np
 import scipy.linalg
 
-from ..errors import ConvergenceError, NotFittedError, ShapeError
+from ..base import Estimator
+from ..errors import ConvergenceError, ShapeError
+from ..registry import Registry
 from .gram import GramStatistics
 
 
@@ -33,7 +35,7 @@ def solve_normal(gram: np.ndarray, rhs: np.ndarray, alpha: float = 0.0) -> np.nd
     return z / (d[:, None] if rhs.ndim == 2 else d)
 
 
-class Optimizer(ABC):
+class Optimizer(Estimator, ABC):
     """A sparse regression solver ``y ≈ Θ ξ`` (scikit-learn style).
 
     ``fit(theta, y)`` forms the Gram statistics and calls ``fit_gram``;
@@ -63,7 +65,7 @@ class Optimizer(ABC):
         """
         from ..data.trajectory import as_2d
 
-        self._check_parameters()
+        self._validate_params()
         gram = as_2d("gram", gram)
         rhs = as_2d("rhs", rhs, n_rows=gram.shape[0], allow_1d=True)
         if gram.shape[0] != gram.shape[1]:
@@ -88,14 +90,16 @@ class Optimizer(ABC):
                yy: np.ndarray | None = None) -> np.ndarray:
         """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics."""
 
-    def _check_parameters(self) -> None:  # noqa: B027 - optional hook, no-op by default
-        """Hook: validate constructor arguments (called at fit time)."""
+    _fit_hint = "fit or fit_gram"
 
-    def check_is_fitted(self) -> None:
-        if not hasattr(self, "coef_"):
-            raise NotFittedError(f"{type(self).__name__} is not fitted; call fit or fit_gram first")
 
-    def __repr__(self) -> str:
-        args = ", ".join(f"{k}={v!r}" for k, v in vars(self).items()
-                         if not k.startswith("_") and not k.endswith("_"))
-        return f"{type(self).__name__}({args})"
+OPTIMIZERS = Registry("optimizer", "optimizer", Optimizer)
+register = OPTIMIZERS.register
+
+
+def get_optimizer(optimizer=None, **params) -> Optimizer:
+    """An Optimizer from an instance, a registered name or spec text (``"stlsq(threshold=0.1)"``),
+    a ``{"name", "params"}`` mapping, or ``None`` (``STLSQ(threshold="auto")``)."""
+    if optimizer is None:
+        optimizer, params = "stlsq", {"threshold": "auto", **params}
+    return OPTIMIZERS.create(optimizer, **params)

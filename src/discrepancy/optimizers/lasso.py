@@ -3,10 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ConvergenceError, ParameterError
-from .base import Optimizer
+from ..constraints import Integral, Interval, Real
+from ..errors import ConvergenceError
+from .base import Optimizer, register
 
 
+@register("lasso")
 class Lasso(Optimizer):
     """Minimise ``1/(2m) |y - Θξ|² + α |ξ|₁`` per target (scikit-learn's scaling).
 
@@ -30,9 +32,10 @@ class Lasso(Optimizer):
         self.normalize_columns = normalize_columns
         self.unbias = unbias
 
-    def _check_parameters(self):
-        if not isinstance(self.alpha, (int, float, np.number)) or not self.alpha >= 0:
-            raise ParameterError(f"alpha must be a number >= 0; got {self.alpha!r}")
+    _parameter_constraints = {"alpha": [Interval(Real, 0, None)],
+                              "max_iter": [Interval(Integral, 1, None)],
+                              "tol": [Interval(Real, 0, None, closed="neither")],
+                              "normalize_columns": [bool], "unbias": [bool]}
 
     def _solve(self, gram, rhs, *, n_samples=None, yy=None):
         m = 1 if n_samples is None else n_samples

@@ -11,10 +11,14 @@ import warnings
 
 import numpy as np
 
+from ..constraints import Integral, Interval, Options, Real
 from ..errors import ParameterError
-from .base import Optimizer, solve_normal
+from .base import Optimizer, register, solve_normal
+
+NON_NEGATIVE = Interval(Real, 0, None)
 
 
+@register("stlsq")
 class STLSQ(Optimizer):
     """Sequentially thresholded ridge regression.
 
@@ -37,14 +41,9 @@ class STLSQ(Optimizer):
         self.normalize_columns = normalize_columns
         self.unbias = unbias
 
-    def _check_parameters(self):
-        names = ("alpha",) if self.threshold == "auto" else ("threshold", "alpha")
-        for name in names:
-            v = getattr(self, name)
-            if not isinstance(v, (int, float, np.number)) or not np.isfinite(v) or v < 0:
-                raise ParameterError(f"{name} must be a finite number >= 0; got {v!r}")
-        if not isinstance(self.max_iter, (int, np.integer)) or self.max_iter < 1:
-            raise ParameterError(f"max_iter must be an integer >= 1; got {self.max_iter!r}")
+    _parameter_constraints = {"threshold": [NON_NEGATIVE, Options(["auto"])],
+                              "alpha": [NON_NEGATIVE], "max_iter": [Interval(Integral, 1, None)],
+                              "normalize_columns": [bool], "unbias": [bool]}
 
     def _solve(self, gram, rhs, *, n_samples=None, yy=None):
         if self.threshold != "auto":

@@ -1,0 +1,129 @@
+"""The frozen fit set-up: everything a fit needs besides the data, resolved once.
+
+A :class:`FitSetup` turns one trajectory into the regression's Gram statistics
+(derivative -> residual ``x_dot - f_m`` -> library Θ -> ``ΘᵀΘ``, ``Θᵀy``, ``yᵀy``). It is
+the seam between the model and the ways data arrive: the in-memory fit, the chunked stream
+(:mod:`discrepancy.streaming`) and Dask (:mod:`discrepancy.distributed`) all compute
+statistics with the same set-up and hand them to :meth:`DiscrepancyModel.fit_statistics`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..data.trajectory import Trajectory
+from ..differentiation import Differentiator
+from ..errors import ParameterError, ShapeError
+from ..libraries import FeatureLibrary
+from ..optimizers import GramStatistics, Optimizer
+from ..symbolic import IDENTIFIER
+from .prior import Prior
+
+
+@dataclass(frozen=True)
+class FitSetup:
+    """Names, prior, fitted library, optimizer template and differentiation for a fit.
+
+    Attributes:
+        state_names, input_names: names of the ``n`` states and ``r`` inputs.
+        prior: the checked prior ``f_m``.
+        library: the feature library, bound to ``[*state_names, *input_names]``.
+        optimizer: the sparse regression (a template; fits work on copies).
+        differentiation: turns measured states into ``(x_smooth, x_dot)``.
+    """
+
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+    prior: Prior
+    library: FeatureLibrary
+    optimizer: Optimizer
+    differentiation: Differentiator
+
+    @property
+    def variable_names(self) -> list[str]:
+        """``[*state_names, *input_names]``: the variables ``z`` the library acts on."""
+        return [*self.state_names, *self.input_names]
+
+    @property
+    def n_states(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def n_inputs(self) -> int:
+        return len(self.input_names)
+
+    @property
+    def n_features(self) -> int:
+        return self.library.n_features_
+
+    def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+        """``(z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m``
+        ``(m, n)`` of one trajectory."""
+        if trajectory.x_dot is None:
+            xs, xd = self.differentiation(trajectory.x, trajectory.t)
+        else:
+            xs, xd = trajectory.x, trajectory.x_dot
+        y = xd - self.prior(xs, trajectory.u)
+        z = xs if trajectory.u is None else np.hstack([xs, trajectory.u])
+        return z, y
+
+    def new_statistics(self) -> GramStatistics:
+        """Empty statistics of the right size (``p`` features, ``n`` targets)."""
+        return GramStatistics(self.n_features, self.n_states)
+
+    def statistics(self, trajectory: Trajectory, *,
+                   into: GramStatistics | None = None) -> GramStatistics:
+        """Add one trajectory's statistics to ``into`` (default: new ones); returns them.
+
+        Rows go through the fixed block grid of :mod:`discrepancy.accumulate`, so the sums
+        do not depend on how the rows arrive (whole, in chunks, on Dask workers).
+        """
+        from ..accumulate import accumulate
+
+        stats = self.new_statistics() if into is None else into
+        z, y = self.residual(trajectory)
+        return accumulate(stats, self.library.transform, z, y)
+
+
+def resolve_setup(model, n_states: int, n_inputs: int) -> FitSetup:
+    """The set-up of ``model``'s parameters for ``n_states`` states and ``n_inputs`` inputs:
+    names checked, defaults filled in, library specs parsed and bound, copies of the
+    optimizer and differentiation method (the model's own parameters are never changed)."""
+    import copy
+
+    from ..differentiation import get_differentiation_method
+    from ..libraries import PolynomialLibrary
+    from ..libraries.spec import parse_library
+    from ..optimizers import get_optimizer
+
+    states = resolve_names("state_names", model.state_names, n_states, "x", one=None)
+    inputs = resolve_names("input_names", model.input_names, n_inputs, "u", one="u")
+    clash = sorted(set(states) & set(inputs))
+    if clash:
+        raise ParameterError(f"state_names and input_names must not share names; both have "
+                             f"{clash}")
+    library = model.feature_library
+    if library is None:
+        library = PolynomialLibrary(degree=2)
+    elif isinstance(library, str):
+        library = parse_library(library)
+    library = copy.deepcopy(library).fit([*states, *inputs])
+    return FitSetup(tuple(states), tuple(inputs), Prior(model.prior, states, inputs), library,
+                    copy.deepcopy(get_optimizer(model.optimizer)),
+                    copy.deepcopy(get_differentiation_method(model.differentiation_method)))
+
+
+def resolve_names(arg: str, given, k: int, stem: str, *, one) -> list[str]:
+    """``k`` variable names: the given ones (checked) or ``stem1 ... stemk`` (``one`` when
+    ``k == 1`` and given)."""
+    if given is None:
+        return [one] if k == 1 and one else [f"{stem}{i + 1}" for i in range(k)]
+    names = [given] if isinstance(given, str) else list(given)
+    if len(names) != k:
+        raise ShapeError(f"{arg} must have {k} names (one per column of the data); "
+                         f"got {len(names)}: {names}")
+    bad = [n for n in names if not isinstance(n, str) or not IDENTIFIER.match(n)]
+    if bad or len(set(names)) != len(names):
+        raise ShapeError(f"{arg} must be distinct identifiers (letters, digits, _); got {names}")
+    return names
