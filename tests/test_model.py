@@ -4,9 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import sympy as sp
+from sklearn.base import clone
 
 import discrepancy as dc
-from discrepancy.errors import NotFittedError
+from discrepancy.errors import NotFittedError, ParameterError, ShapeError
 from discrepancy.symbolic import symbol
 
 x1, x2, u = symbol("x1"), symbol("x2"), symbol("u")
@@ -477,3 +478,61 @@ def test_predict_and_simulate_evaluate_only_active_terms(vdp_data, vdp_validatio
     finally:
         _ARMED["on"] = False
     np.testing.assert_allclose(sim, vdp_validation.x[:500], atol=1e-6)
+
+
+# ------------------------------------------------------------ the public seam
+
+def test_statistics_of_trajectories_summed_equal_the_fit_of_their_list(vdp_data, helpers):
+    """make_setup -> statistics per trajectory -> fit_statistics is the fit, piece by piece
+    (the way streamed, distributed or incrementally updated fits use it)."""
+    from discrepancy.data import as_trajectories
+
+    x = vdp_data.x
+    parts = [x[:900], x[900:1700], x[1700:]]
+    model = dc.DiscrepancyModel(prior=helpers.vdp_rhs(0.1), feature_library=dc.PolynomialLibrary(3),
+                                differentiation_method=dc.SavitzkyGolay(21))
+    whole = clone(model).fit(parts, t=vdp_data.dt)
+    setup = model.make_setup(2, 0)
+    stats = setup.new_statistics()
+    for tr in as_trajectories(parts, vdp_data.dt):
+        stats += setup.statistics(tr)
+    model.fit_statistics(stats, setup)
+    np.testing.assert_allclose(model.coef_, whole.coef_, rtol=1e-12, atol=1e-14)
+    assert model.statistics_.count == len(x)
+    assert model.get_feature_names() == whole.get_feature_names()
+
+
+def test_fit_statistics_refuses_statistics_of_another_set_up(vdp_data):
+    model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(3))
+    other = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(2)).make_setup(2, 0)
+    with pytest.raises(ShapeError, match="6 features.*has 10"):
+        model.fit_statistics(other.new_statistics(), model.make_setup(2, 0))
+    with pytest.raises(ParameterError, match="FitSetup"):
+        model.fit_statistics(other.new_statistics(), "setup")
+
+
+def test_a_state_named_like_an_input_is_refused(vdp_data):
+    u = np.ones((len(vdp_data.x), 1))
+    model = dc.DiscrepancyModel(state_names=["a", "b"], input_names=["a"])
+    with pytest.raises(ParameterError, match=r"must not share names.*\['a'\]"):
+        model.fit(vdp_data.x, t=vdp_data.dt, u=u)
+
+
+def test_specs_are_accepted_for_library_optimizer_and_differentiation(vdp_data, helpers):
+    spec = dc.DiscrepancyModel(prior=helpers.vdp_rhs(0.1), feature_library="poly(3)",
+                               optimizer="stlsq(threshold=0.05)",
+                               differentiation_method="savitzky_golay(window_length=21)")
+    objects = dc.DiscrepancyModel(prior=helpers.vdp_rhs(0.1),
+                                  feature_library=dc.PolynomialLibrary(3),
+                                  optimizer=dc.STLSQ(threshold=0.05),
+                                  differentiation_method=dc.SavitzkyGolay(21))
+    a = spec.fit(vdp_data.x, t=vdp_data.dt).coef_
+    b = objects.fit(vdp_data.x, t=vdp_data.dt).coef_
+    np.testing.assert_array_equal(a, b)
+    assert np.count_nonzero(a) == 2 and abs(a[1, 2] - 0.4) < 0.01  # truth: 0.4 x2
+
+
+def test_arguments_after_t_must_be_named(vdp_data):
+    model = dc.DiscrepancyModel()
+    with pytest.raises(ParameterError, match="must be passed by name.*PySINDy"):
+        model.fit(vdp_data.x, vdp_data.dt, vdp_data.x_dot)

@@ -458,3 +458,123 @@ def test_random_edits_give_a_model_or_a_model_file_error(saved, tmp_path_factory
         model.predict(*args)
     except (DiscrepancyError, FloatingPointError):
         pass
+
+
+# ------------------------------------------------------------ versions and safe saves
+
+def test_version_1_files_still_load(sympy_model, tmp_path):
+    """A file as version 1 wrote it (no optimizer, differentiation or fit fields)."""
+    doc = sympy_model.to_state()
+    old = {k: doc[k] for k in ("format", "written_by", "state_names", "input_names",
+                               "features", "coefficients", "prior", "user_functions",
+                               "metadata")}
+    old["version"] = 1
+    (tmp_path / "v1.json").write_text(json.dumps(old))
+    loaded = dc.load_model(tmp_path / "v1.json")
+    x = states(2)
+    np.testing.assert_array_equal(loaded.predict(x), sympy_model.predict(x))
+
+
+def test_components_are_stored_and_rebuilt(sympy_model, tmp_path):
+    sympy_model.save(tmp_path / "m.json")
+    doc = json.loads((tmp_path / "m.json").read_text())
+    assert doc["differentiation_method"] == {"name": "savitzky_golay", "params": {
+        "window_length": 21, "polyorder": 3, "smooth": True}}
+    assert doc["optimizer"]["name"] == "stlsq" and doc["optimizer"]["params"]["threshold"] == 0.05
+    loaded = dc.load_model(tmp_path / "m.json")
+    assert isinstance(loaded.differentiation_method_, dc.SavitzkyGolay)
+    assert loaded.optimizer_.threshold == 0.05
+
+
+@pytest.mark.parametrize("field, value", [
+    ("optimizer", {"name": "stlsq", "params": {"threshold": -1}}),
+    ("optimizer", {"name": "__import__", "params": {}}),
+    ("differentiation_method", {"name": "savitzky_golay", "params": {"window_length": 4}}),
+    ("differentiation_method", {"name": "spline", "params": {"s": "os.system('x')"}}),
+    ("fit", {"n_samples": "many"}),
+])
+def test_bad_stored_components_are_refused(sympy_model, tmp_path, field, value):
+    doc = sympy_model.to_state()
+    doc[field] = value
+    (tmp_path / "m.json").write_text(json.dumps(doc))
+    with pytest.raises(ModelFileError, match=field):
+        dc.load_model(tmp_path / "m.json")
+
+
+def test_constants_that_are_not_finite_reals_are_refused(sympy_model, tmp_path):
+    for constant in (["fn", "log", ["num", 0, 1]], ["pow", ["num", 0, 1], ["num", -1, 1]],
+                     ["fn", "log", ["num", -1, 1]]):
+        doc = sympy_model.to_state()
+        doc["features"][0] = constant
+        (tmp_path / "m.json").write_text(json.dumps(doc))
+        with pytest.raises(ModelFileError, match="not a finite real"):
+            dc.load_model(tmp_path / "m.json")
+
+
+_SAVE_UNDER_LIMIT = """
+import resource, sys
+import numpy as np
+import discrepancy as dc
+x = np.random.default_rng(0).uniform(-1, 1, (200, 2))
+model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(6),
+                            optimizer=dc.STLSQ(threshold=0)).fit(x, t=1.0, x_dot=x[:, ::-1])
+resource.setrlimit(resource.RLIMIT_FSIZE, (2000, 2000))   # the new file cannot be written
+try:
+    model.save(sys.argv[1])
+except dc.errors.ModelFileError as e:
+    print("refused:", e)
+"""
+
+
+def test_a_failing_save_keeps_the_previous_file(plain_model, tmp_path):
+    path = tmp_path / "model.json"
+    plain_model.save(path)
+    good = path.read_bytes()
+    out = subprocess.run([sys.executable, "-c", _SAVE_UNDER_LIMIT, str(path)],
+                         capture_output=True, text=True, timeout=120)
+    assert "refused: cannot write" in out.stdout, out.stderr
+    assert path.read_bytes() == good
+    assert [p.name for p in tmp_path.iterdir()] == ["model.json"]  # no temporary left
+
+
+_SAVE_FOREVER = """
+import os, sys, time
+import discrepancy.models.model_file as mf
+real = os.fsync
+def slow_fsync(fd):           # the new content is written but not yet in place
+    print("writing", flush=True)
+    time.sleep(60)
+mf.os.fsync = slow_fsync
+doc = {"format": "discrepancy-model", "big": "x" * 100000}
+mf.write_json(sys.argv[1], doc)
+"""
+
+
+def test_a_save_killed_midway_keeps_the_previous_file(plain_model, tmp_path):
+    path = tmp_path / "model.json"
+    plain_model.save(path)
+    good = path.read_bytes()
+    proc = subprocess.Popen([sys.executable, "-c", _SAVE_FOREVER, str(path)],
+                            stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "writing"
+    proc.kill()
+    proc.wait(timeout=30)
+    assert path.read_bytes() == good
+    assert dc.load_model(path).coef_.tolist() == plain_model.coef_.tolist()
+
+
+def test_saving_to_a_folder_or_a_missing_folder_is_a_clear_error(plain_model, tmp_path):
+    with pytest.raises(ModelFileError, match="is a folder"):
+        plain_model.save(tmp_path)
+    with pytest.raises(ModelFileError, match="cannot write"):
+        plain_model.save(tmp_path / "missing" / "m.json")
+
+
+def test_oversized_files_are_refused_before_parsing(tmp_path):
+    from discrepancy.models import model_file
+
+    path = tmp_path / "big.json"
+    with open(path, "w") as f:
+        f.write("[" + " " * (model_file.MAX_BYTES + 10) + "]")
+    with pytest.raises(ModelFileError, match="bytes is more than"):
+        dc.load_model(path)

@@ -105,7 +105,9 @@ def compile_numpy(expr: sp.Expr, names: Sequence[str],
                           f"(supported: {', '.join(sorted(FUNCTIONS))}, or user functions "
                           f"{sorted(functions)})")
 
-    return build(sp.sympify(expr) if not isinstance(expr, sp.Basic) else expr)
+    if not isinstance(expr, sp.Basic):
+        raise ExportError(f"expected a sympy expression, got {type(expr).__name__}")
+    return build(expr)
 
 
 def _reduce(op, fs, Z):
@@ -150,75 +152,113 @@ CONSTANTS = {"pi": sp.pi, "E": sp.E}
 MAX_EXPONENT = 64      # numeric exponents: keeps sympy's exact arithmetic small
 
 
-def _bounded(expr, bad):
-    """Refuse numbers beyond float range (they can only come from a tampered file)."""
-    if expr.is_Number and not np.isfinite(float(expr)):
-        raise bad("a number in the expression is beyond floating-point range")
-    return expr
+class _Reader:
+    """Context of one :func:`from_data` call: where the expression is, which user functions
+    it may call, and the error to raise."""
+
+    def __init__(self, where: str, functions):
+        self.where, self.functions = where, functions
+
+    def bad(self, why: str) -> ModelFileError:
+        return ModelFileError(f"{self.where}: {why}; the model file is corrupted or was edited")
+
+    def read(self, data, depth: int) -> sp.Expr:
+        if depth > MAX_DEPTH:
+            raise self.bad("expression nested too deeply")
+        if not isinstance(data, list) or not data or not isinstance(data[0], str):
+            raise self.bad(f"expected a list starting with a node name, got "
+                           f"{type(data).__name__}")
+        reader = _NODE_READERS.get(data[0])
+        if reader is None:
+            raise self.bad(f"unknown node {data[0]!r:.40}")
+        return reader(self, data[1:], depth + 1)
+
+    def bounded(self, expr):
+        """Refuse numbers beyond float range (they can only come from a tampered file)."""
+        if expr.is_Number and not np.isfinite(float(expr)):
+            raise self.bad("a number in the expression is beyond floating-point range")
+        return expr
 
 
-def from_data(data, *, where: str = "expression", depth: int = 0,
+def _read_sym(r, args, depth):
+    if len(args) != 1 or not isinstance(args[0], str) or not IDENTIFIER.match(args[0]):
+        raise r.bad(f"symbol name must be an identifier, got {args!r:.60}")
+    return symbol(args[0])
+
+
+def _is_int(a) -> bool:
+    return isinstance(a, int) and not isinstance(a, bool) and abs(a) <= MAX_INTEGER
+
+
+def _read_num(r, args, depth):
+    if len(args) != 2 or not all(_is_int(a) for a in args) or args[1] == 0:
+        raise r.bad(f"rational must be two integers of at most {MAX_INTEGER} with q != 0, "
+                    f"got {str(args)[:60]}")
+    return sp.Rational(args[0], args[1])
+
+
+def _read_const(r, args, depth):
+    if len(args) != 1 or args[0] not in CONSTANTS:
+        raise r.bad(f"constant must be one of {sorted(CONSTANTS)}, got {str(args)[:40]}")
+    return CONSTANTS[args[0]]
+
+
+def _read_float(r, args, depth):
+    if len(args) != 1 or isinstance(args[0], bool) or not isinstance(args[0], (int, float)) \
+            or not np.isfinite(args[0]):
+        raise r.bad(f"float must be one finite number, got {args!r:.60}")
+    return sp.Float(args[0])
+
+
+def _read_sum_or_product(op):
+    def read(r, args, depth):
+        if len(args) < 2:
+            raise r.bad(f"{op.__name__.lower()} needs at least two operands")
+        return r.bounded(op(*[r.read(a, depth) for a in args]))
+    return read
+
+
+def _read_pow(r, args, depth):
+    if len(args) != 2:
+        raise r.bad("pow needs a base and an exponent")
+    base, exponent = r.read(args[0], depth), r.read(args[1], depth)
+    if exponent.is_number and not (exponent.is_Rational and abs(exponent.p) <= MAX_EXPONENT
+                                   and exponent.q <= MAX_EXPONENT
+                                   or exponent.is_Float and abs(exponent) <= MAX_EXPONENT):
+        raise r.bad(f"numeric exponents must be at most {MAX_EXPONENT} in size")
+    return r.bounded(sp.Pow(base, exponent))
+
+
+def _read_fn(r, args, depth):
+    if not args or not isinstance(args[0], str) or not IDENTIFIER.match(args[0]):
+        raise r.bad(f"function name must be an identifier, got {args[:1]!r:.60}")
+    name, fargs = args[0], [r.read(a, depth) for a in args[1:]]
+    if name in FUNCTIONS:
+        if len(fargs) != 1:
+            raise r.bad(f"{name} takes one argument, got {len(fargs)}")
+        return r.bounded(FUNCTIONS[name][0](fargs[0]))
+    if r.functions is not None and name not in r.functions:
+        raise r.bad(f"function {name!r} is neither built in nor a declared user function")
+    if not fargs:
+        raise r.bad(f"user function {name!r} needs at least one argument")
+    return sp.Function(name)(*fargs)
+
+
+_NODE_READERS = {"sym": _read_sym, "num": _read_num, "const": _read_const, "float": _read_float,
+                 "add": _read_sum_or_product(sp.Add), "mul": _read_sum_or_product(sp.Mul),
+                 "pow": _read_pow, "fn": _read_fn}
+MAX_DEPTH = 64
+
+
+def from_data(data, *, where: str = "expression",
               functions: Sequence[str] | None = None) -> sp.Expr:
     """Rebuild an expression from :func:`to_data` output, refusing anything else.
 
-    ``functions`` lists the user function names allowed in ``fn`` nodes (``None``: any).
-    Numbers are bounded, so a small tampered file cannot make sympy compute huge integers.
+    One reader per node type (``_NODE_READERS``); ``functions`` lists the user function
+    names allowed in ``fn`` nodes (``None``: any). Numbers are bounded, so a small tampered
+    file cannot make sympy compute huge integers.
     """
-    def bad(why):
-        return ModelFileError(f"{where}: {why}; the model file is corrupted or was edited")
-    if depth > 64:
-        raise bad("expression nested too deeply")
-    if not isinstance(data, list) or not data or not isinstance(data[0], str):
-        raise bad(f"expected a list starting with a node name, got {type(data).__name__}")
-    tag, args = data[0], data[1:]
-
-    def sub(a):
-        return from_data(a, where=where, depth=depth + 1, functions=functions)
-
-    if tag == "sym":
-        if len(args) != 1 or not isinstance(args[0], str) or not IDENTIFIER.match(args[0]):
-            raise bad(f"symbol name must be an identifier, got {args!r:.60}")
-        return symbol(args[0])
-    if tag == "num":
-        if len(args) != 2 or not all(isinstance(a, int) and not isinstance(a, bool)
-                                     and abs(a) <= MAX_INTEGER for a in args) or args[1] == 0:
-            raise bad(f"rational must be two integers of at most {MAX_INTEGER} with q != 0, "
-                      f"got {str(args)[:60]}")
-        return sp.Rational(args[0], args[1])
-    if tag == "const":
-        if len(args) != 1 or args[0] not in CONSTANTS:
-            raise bad(f"constant must be one of {sorted(CONSTANTS)}, got {str(args)[:40]}")
-        return CONSTANTS[args[0]]
-    if tag == "float":
-        if len(args) != 1 or not isinstance(args[0], (int, float)) or not np.isfinite(args[0]):
-            raise bad(f"float must be one finite number, got {args!r:.60}")
-        return sp.Float(args[0])
-    if tag in ("add", "mul"):
-        if len(args) < 2:
-            raise bad(f"{tag} needs at least two operands")
-        parts = [sub(a) for a in args]
-        return _bounded(sp.Add(*parts) if tag == "add" else sp.Mul(*parts), bad)
-    if tag == "pow":
-        if len(args) != 2:
-            raise bad("pow needs a base and an exponent")
-        base, exponent = sub(args[0]), sub(args[1])
-        if exponent.is_number and not (exponent.is_Rational and abs(exponent.p) <= MAX_EXPONENT
-                                       and exponent.q <= MAX_EXPONENT
-                                       or exponent.is_Float and abs(exponent) <= MAX_EXPONENT):
-            raise bad(f"numeric exponents must be at most {MAX_EXPONENT} in size")
-        return _bounded(sp.Pow(base, exponent), bad)
-    if tag == "fn":
-        if not args or not isinstance(args[0], str) or not IDENTIFIER.match(args[0]):
-            raise bad(f"function name must be an identifier, got {args[:1]!r:.60}")
-        name, fargs = args[0], [sub(a) for a in args[1:]]
-        if name in FUNCTIONS:
-            if len(fargs) != 1:
-                raise bad(f"{name} takes one argument, got {len(fargs)}")
-            return _bounded(FUNCTIONS[name][0](fargs[0]), bad)
-        if functions is not None and name not in functions:
-            raise bad(f"function {name!r} is neither built in nor a declared user function")
-        return sp.Function(name)(*fargs)
-    raise bad(f"unknown node {tag!r:.40}")
+    return _Reader(where, functions).read(data, 0)
 
 
 def to_casadi(expr: sp.Expr, variables: Mapping[str, object], *, term: str | None = None):
