@@ -161,9 +161,10 @@ def test_fitting_twice_gives_the_same_result(name):
 def test_fit_leaves_the_parameters_untouched(name):
     case = CASES[name]
     obj = case.make()
-    before = repr(obj.get_params(deep=True))
+    before, text = repr(obj.get_params(deep=True)), repr(obj)
     case.fit(obj)
     assert repr(obj.get_params(deep=True)) == before
+    assert repr(obj) == text  # fitted state never shows in the repr
 
 
 def test_model_save_load_round_trip(tmp_path):

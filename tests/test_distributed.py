@@ -140,3 +140,17 @@ def test_local_cluster_survives_a_killed_worker(x):
         assert got.statistics_.count == x.shape[0]  # no block lost or counted twice
         assert rel(got.statistics_.gram, plain.statistics_.gram) < 1e-13
         assert rel(got.coefficients(), ref.coefficients()) < 1e-10
+
+
+def test_nan_in_a_dask_array_is_named_with_its_rows(x):
+    bad = x.copy()
+    bad[12_345, 2] = np.nan
+    with pytest.raises(dc.errors.DataError,
+                       match=r"dask array x\[0\] rows .*: x must be finite; found nan at row "
+                             r"\d+ of the chunk \(row 12345 of the trajectory, column 2\)"):
+        model().fit(da.from_array(bad, chunks=4000), t=DT)
+
+
+def test_dask_array_with_no_rows_is_refused():
+    with pytest.raises(dc.errors.ShapeError, match="no rows"):
+        model().fit(da.zeros((0, 3), chunks=10), t=DT)
