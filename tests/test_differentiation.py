@@ -29,12 +29,14 @@ CASES = {
     # global smoothers are biased near the ends; judge them in the interior
     "trend_filtered": (dc.TrendFiltered(order=2, alpha=1e-8), None, 2e-2, 10),
     "kalman": (dc.Kalman(alpha=1e-9), 0.1, 1e-5, 10),
+    # natural end conditions (zero curvature) bend the ends: judge the interior
+    "smoothing_spline": (dc.SmoothingSpline(), None, 2e-3, 10),
 }
 
 
 def test_every_registered_method_is_tested():
-    # Dequantised needs quantised data: tests/test_dequantise.py
-    assert set(available_methods()) == set(CASES) | {"dequantised"}
+    # Dequantised needs quantised data (tests/test_dequantise.py); auto: tests/test_auto.py
+    assert set(available_methods()) == set(CASES) | {"dequantised", "auto"}
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -196,8 +198,8 @@ def test_unknown_method_name_lists_the_valid_names():
         assert name in message
 
 
-def test_default_is_finite_difference():
-    assert isinstance(get_differentiation_method(None), dc.FiniteDifference)
+def test_default_is_chosen_from_the_data():
+    assert isinstance(get_differentiation_method(None), dc.AutoSmoothing)
 
 
 @pytest.mark.parametrize("kwargs", [dict(window_length=10), dict(window_length=1),

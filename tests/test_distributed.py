@@ -146,7 +146,7 @@ def test_nan_in_a_dask_array_is_named_with_its_rows(x):
     bad = x.copy()
     bad[12_345, 2] = np.nan
     with pytest.raises(dc.errors.DataError,
-                       match=r"dask array x\[0\] rows .*: x must be finite; found nan at row "
+                       match=r"dask array x\[0\].*: x must be finite; found nan at row "
                              r"\d+ of the chunk \(row 12345 of the trajectory, column 2\)"):
         model().fit(da.from_array(bad, chunks=4000), t=DT)
 

@@ -113,7 +113,8 @@ def test_per_chunk_nonuniform_times_and_inputs():
     x = np.c_[np.sin(t), np.cos(2 * t)] + 0.1 * u
     def m():
         return dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(degree=2),
-                                   optimizer=dc.STLSQ(threshold=0.0))
+                                   optimizer=dc.STLSQ(threshold=0.0),
+                                   differentiation_method=dc.FiniteDifference())
     ref = m().fit(x, t=t, u=u)
     got = m().fit(chunks(x, size=999, t=t, u=u))
     assert got.n_inputs_ == 1

@@ -15,10 +15,12 @@ from . import errors, io, systems
 from .data.chunks import Chunk
 from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
 from .differentiation import (
+    AutoSmoothing,
     Dequantised,
     FiniteDifference,
     Kalman,
     SavitzkyGolay,
+    SmoothingSpline,
     Spline,
     TrendFiltered,
 )
@@ -28,9 +30,10 @@ from .models import DiscrepancyModel, load_model
 from .optimizers import STLSQ, GramStatistics, Lasso
 
 __all__ = [
-    "CSVFiles", "Chunk", "HDF5Source", "NPZFiles", "ZarrSource",
+    "AutoSmoothing", "CSVFiles", "Chunk", "HDF5Source", "NPZFiles", "ZarrSource",
     "CustomLibrary", "Dequantised", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
     "FourierLibrary", "GramStatistics",
-    "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "Spline", "TrendFiltered",
+    "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spline",
+    "TrendFiltered",
     "errors", "io", "load_model", "systems",
 ]

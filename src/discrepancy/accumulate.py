@@ -83,7 +83,8 @@ class BlockAccumulator:
     Args:
         transform: a fitted library's ``transform(Z, out=...)``: ``Z (k, n_variables)`` to
             Θ ``(k, p)`` written into ``out``.
-        p: number of features; n: number of targets.
+        total: the statistics to add to (its folds, if any, say how rows are dealt out);
+            the next row added is data row ``total.count``.
         n_threads: threads to use (default :func:`default_threads`); does not change the result.
 
     Feed rows of one trajectory with :meth:`add`; every call but the last of a
@@ -91,44 +92,49 @@ class BlockAccumulator:
     carries the remainder over), then :meth:`finish_trajectory` before the next one.
     """
 
-    def __init__(self, transform: Callable[[np.ndarray], np.ndarray], p: int, n: int, *,
-                 n_threads: int | None = None):
+    def __init__(self, transform: Callable[[np.ndarray], np.ndarray], total: GramStatistics,
+                 *, n_threads: int | None = None):
         self.transform = transform
-        self.p, self.n = p, n
+        self.total = total
+        self.p, self.n = total.p, total.n
         self.n_threads = default_threads() if n_threads is None else max(1, int(n_threads))
-        self.total = GramStatistics(p, n)
+        self._row = total.count
         self._new_lanes()
 
     def _new_lanes(self) -> None:
-        self._lanes = [GramStatistics(self.p, self.n) for _ in range(LANES)]
+        self._lanes = [self.total.empty_like() for _ in range(LANES)]
         self._blocks = 0
 
-    def add(self, z: np.ndarray, y: np.ndarray) -> None:
-        """Add rows ``z`` ``(k, n_variables)`` with targets ``y`` ``(k, n)``."""
+    def add(self, z: np.ndarray, y: np.ndarray, signal: np.ndarray | None = None) -> None:
+        """Add rows ``z`` ``(k, n_variables)`` with targets ``y`` ``(k, n)`` (and the
+        derivatives ``signal`` ``(k, n)`` they came from; default ``y``)."""
         k = z.shape[0]
         if k == 0:
             return
+        signal = y if signal is None else signal
         starts = list(range(0, k, BLOCK_ROWS))
         work = [[] for _ in range(LANES)]
         for b, s in enumerate(starts):
             work[(self._blocks + b) % LANES].append(s)
         self._blocks += len(starts)
+        first, self._row = self._row, self._row + k
         threads = max(1, min(self.n_threads, len(starts) // MIN_BLOCKS_PER_THREAD))
         with _single_threaded_blas():
             if threads == 1:
                 for i in range(LANES):
-                    self._run(i, work[i], z, y)
+                    self._run(i, work[i], z, y, signal, first)
             else:
                 groups = [list(range(i, LANES, threads)) for i in range(threads)]
                 list(_executor(threads).map(
-                    lambda g: [self._run(i, work[i], z, y) for i in g], groups))
+                    lambda g: [self._run(i, work[i], z, y, signal, first) for i in g], groups))
 
-    def _run(self, i: int, starts: list[int], z: np.ndarray, y: np.ndarray) -> None:
-        """Add the blocks starting at rows ``starts`` to lane ``i``.
+    def _run(self, i, starts, z, y, signal, first) -> None:
+        """Add the blocks starting at rows ``starts`` (data row ``first + s``) to lane ``i``.
 
         Each block fills rows of ``A = [Θ | y]ᵀ`` ``(p + n, k)`` and adds ``A Aᵀ``: one
         product gives ``ΘᵀΘ``, ``Θᵀy`` and ``yᵀy`` (a separate ``Θᵀy`` with n = 3 columns
-        measured a third of the ``ΘᵀΘ`` time; the extra rows cost ~10 %).
+        measured a third of the ``ΘᵀΘ`` time; the extra rows cost ~10 %). With folds, the
+        product is taken per piece of the block that lies in one fold's segment.
         """
         p, lane = self.p, self._lanes[i]
         buffer = _buffer(p + self.n)
@@ -137,25 +143,37 @@ class BlockAccumulator:
             k = zb.shape[0]
             self.transform(zb, out=buffer[:p, :k].T)
             buffer[p:, :k] = y[s:s + BLOCK_ROWS].T
-            a = buffer[:, :k]
-            g = a @ a.T
-            lane.gram += g[:p, :p]
-            lane.rhs += g[:p, p:]
-            lane.yy += np.diagonal(g[p:, p:])
-            lane.count += k
+            sb = signal[s:s + BLOCK_ROWS]
+            if lane.folds is None:
+                _add_product(lane, buffer[:, :k], sb, p)
+                continue
+            for lo, hi, fold in lane.pieces(first + s, k):
+                _add_product(lane.folds[fold], buffer[:, lo:hi], sb[lo:hi], p)
 
     def finish_trajectory(self) -> None:
         """Add the lanes of the current trajectory to :attr:`total`, in lane order."""
         for lane in self._lanes:
+            if lane.folds is not None:
+                lane._sum_folds()
             self.total += lane
         self._new_lanes()
 
 
-def accumulate(stats: GramStatistics, transform, z: np.ndarray, y: np.ndarray, *,
+def _add_product(stats: GramStatistics, a: np.ndarray, signal: np.ndarray, p: int) -> None:
+    g = a @ a.T
+    stats.gram += g[:p, :p]
+    stats.rhs += g[:p, p:]
+    stats.yy += np.diagonal(g[p:, p:])
+    stats.signal += np.einsum("ij,ij->j", signal, signal)
+    stats.count += a.shape[1]
+
+
+def accumulate(stats: GramStatistics, transform, z: np.ndarray, y: np.ndarray,
+               signal: np.ndarray | None = None, *,
                n_threads: int | None = None) -> GramStatistics:
-    """Add the statistics of one whole trajectory's rows ``z``, ``y`` to ``stats`` in place."""
-    acc = BlockAccumulator(transform, stats.p, stats.n, n_threads=n_threads)
-    acc.total = stats
-    acc.add(z, y)
+    """Add the statistics of one whole trajectory's rows ``z``, ``y`` (derivatives
+    ``signal``) to ``stats`` in place; its rows follow the ``stats.count`` rows before."""
+    acc = BlockAccumulator(transform, stats, n_threads=n_threads)
+    acc.add(z, y, signal)
     acc.finish_trajectory()
     return stats

@@ -28,20 +28,7 @@ from .optimizers.gram import GramStatistics
 SPLIT_EVERY = 8
 
 
-def _pack(stats: GramStatistics) -> np.ndarray:
-    return np.concatenate([stats.gram.ravel(), stats.rhs.ravel(), stats.yy, [stats.count]])
-
-
-def _unpack(v: np.ndarray, p: int, n: int) -> GramStatistics:
-    s = GramStatistics(p, n)
-    s.gram = v[:p * p].reshape(p, p).copy()
-    s.rhs = v[p * p:p * p + p * n].reshape(p, n).copy()
-    s.yy = v[p * p + p * n:p * p + p * n + n].copy()
-    s.count = int(round(v[-1]))
-    return s
-
-
-def _block(rows, x, *rest, setup, step, halo, n_total, trajectory):
+def _block(rows, x, *rest, setup, step, halo, n_total, trajectory, offset):
     """Packed statistics ``(1, L)`` of one row block (``rows``: global row numbers).
 
     The block's rows are checked first (the same checks as in-memory data), so a NaN is
@@ -62,13 +49,32 @@ def _block(rows, x, *rest, setup, step, halo, n_total, trajectory):
         hi = len(rows) if rows[-1] == n_total - 1 else len(rows) - halo
     else:
         xs, lo, hi = x, 0, len(rows)
-    z, y = setup.residual(Trajectory(t[lo:hi], xs[lo:hi], None if u is None else u[lo:hi],
+    z, y, xd = setup.rows(Trajectory(t[lo:hi], xs[lo:hi], None if u is None else u[lo:hi],
                                      xd[lo:hi]))
-    acc = BlockAccumulator(setup.library.transform, setup.n_features, setup.n_states,
-                           n_threads=1)
-    acc.add(z, y)
+    stats = setup.new_statistics()
+    stats.count = offset + int(rows[lo])  # the data row of this block's first row (folds)
+    acc = BlockAccumulator(setup.library.transform, stats, n_threads=1)
+    acc.add(z, y, xd)
     acc.finish_trajectory()
-    return _pack(acc.total)[None, :]
+    stats.count -= offset + int(rows[lo])
+    return stats.to_vector()[None, :]
+
+
+def _sample(model, xs, us, xds, step) -> list[Trajectory]:
+    """The first rows of the dask trajectories, computed, for choices made from the data."""
+    from .streaming import sample_rows_of
+
+    budget, out = sample_rows_of(model), []
+    for x, u, xd in zip(xs, us, xds, strict=True):
+        if budget <= 0:
+            break
+        rows = min(budget, x.shape[0])
+        part = [None if a is None else check_array(name, np.asarray(a[:rows]), allow_1d=True,
+                                                   where=f"dask array x[{len(out)}]")
+                for name, a in (("x", x), ("u", u), ("x_dot", xd))]
+        out.append(Trajectory(np.arange(rows) * step, *part))
+        budget -= rows
+    return out
 
 
 def _as_dask(name, a, like, cols):
@@ -85,7 +91,7 @@ def _as_dask(name, a, like, cols):
     return a.astype(float).rechunk((like.chunks[0], -1))
 
 
-def _trajectory_graph(setup, x, u, xd, step, trajectory):
+def _trajectory_graph(setup, x, u, xd, step, trajectory, offset):
     """Dask array ``(L,)``: packed statistics of one trajectory."""
     import dask.array as da
 
@@ -95,9 +101,8 @@ def _trajectory_graph(setup, x, u, xd, step, trajectory):
     x = x.astype(float).rechunk({1: -1})
     rows = da.arange(m, chunks=(x.chunks[0],))[:, None].astype(float)
     args = [a for a in (x, u, xd) if a is not None]
-    p, n = setup.n_features, setup.n_states
-    out_chunks = (1, p * p + p * n + n + 1)
-    common = dict(setup=setup, step=step, n_total=m, trajectory=trajectory,
+    out_chunks = (1, setup.new_statistics().to_vector().size)
+    common = dict(setup=setup, step=step, n_total=m, trajectory=trajectory, offset=offset,
                   meta=np.empty((0, 0)), dtype=float, chunks=out_chunks)
     if xd is None:
         halo = setup.differentiation.halo
@@ -127,16 +132,20 @@ def dask_statistics(model, x, *, t=None, u=None, x_dot=None):
         raise ShapeError(f"x must be 2-D (samples, states); got {describe(xs[0])}")
     n = xs[0].shape[1]
     r = 0 if us[0] is None else (1 if np.ndim(us[0]) == 1 else us[0].shape[1])
-    setup = model.make_setup(n, r)
     step = step_of(t)
-    graphs = []
+    for k, xk in enumerate(xs):
+        if xk.shape[0] == 0:
+            raise ShapeError(f"x[{k}] has no rows")
+    setup = model.make_setup(n, r, sample=_sample(model, xs, us, xds, step))
+    graphs, offset = [], 0
     for k, (xk, uk, xdk) in enumerate(zip(xs, us, xds, strict=True)):
         if xk.ndim != 2 or xk.shape[1] != n:
             raise ShapeError(f"x[{k}] must have shape (m, {n}); got {describe(xk)}")
         graphs.append(_trajectory_graph(setup, xk, _as_dask("u", uk, xk, r or None),
-                                        _as_dask("x_dot", xdk, xk, n), step, k))
+                                        _as_dask("x_dot", xdk, xk, n), step, k, offset))
+        offset += xk.shape[0]
     (total,) = _compute(sum(graphs[1:], graphs[0]))
-    return setup, _unpack(np.asarray(total), setup.n_features, n)
+    return setup, setup.new_statistics().from_vector(np.asarray(total))
 
 
 def _compute(graph):
@@ -174,13 +183,13 @@ def _per_trajectory(name, value, k):
 def _source_stats(setup, source, step):
     from .streaming import stream_statistics
 
-    def same_layout(n, r):
+    def same_layout(n, r, sample):
         if (n, r) != (setup.n_states, setup.n_inputs):
             raise ShapeError(f"{n} states and {r} inputs; the first source has "
                              f"{setup.n_states} and {setup.n_inputs}")
         return setup
 
-    return _pack(stream_statistics(source, step, same_layout, progress=False, n_threads=1)[1])
+    return stream_statistics(source, step, same_layout, progress=False, n_threads=1)[1]
 
 
 def fit_sources(model, sources, *, t=None):
@@ -189,17 +198,23 @@ def fit_sources(model, sources, *, t=None):
     each, summed as a tree. Returns the model."""
     from dask import delayed
 
-    from .data.chunks import peek_layout
-
     sources = list(sources)
     if not sources:
         raise ShapeError("sources must hold at least one ChunkSource; got an empty list")
-    n, r = peek_layout(sources[0])
-    setup = model.make_setup(n, r)
+    from .streaming import setup_from_source
+
+    setup = setup_from_source(model, sources[0], step_of(t))
     step = step_of(t)
     parts = [delayed(_source_stats)(setup, s, step) for s in sources]
     while len(parts) > 1:
-        parts = [delayed(sum)(parts[i:i + SPLIT_EVERY]) for i in range(0, len(parts),
+        parts = [delayed(_merged)(parts[i:i + SPLIT_EVERY]) for i in range(0, len(parts),
                                                                          SPLIT_EVERY)]
     (total,) = _compute(parts[0])
-    return model.fit_statistics(_unpack(np.asarray(total), setup.n_features, n), setup)
+    return model.fit_statistics(total, setup)
+
+
+def _merged(parts: list[GramStatistics]) -> GramStatistics:
+    out = parts[0].empty_like()
+    for part in parts:
+        out += part
+    return out

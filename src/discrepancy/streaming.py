@@ -60,12 +60,12 @@ def _concat(a: Chunk, b: Chunk) -> Chunk:
                  where=b.where)
 
 
-def residual_rows(setup, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """Yield ``(z, y)`` for consecutive rows of one trajectory, equal to ``setup.residual``
-    of the whole trajectory (chunks validated)."""
+def residual_rows(setup, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, ...]]:
+    """Yield ``(z, y, x_dot)`` for consecutive rows of one trajectory, equal to
+    ``setup.rows`` of the whole trajectory (chunks validated)."""
     for xs, xd, lo, hi in _stitched(chunks, setup.differentiation):
         if hi > lo:
-            yield setup.residual(Trajectory(xs.t[lo:hi], xs.x[lo:hi], None if xs.u is None
+            yield setup.rows(Trajectory(xs.t[lo:hi], xs.x[lo:hi], None if xs.u is None
                                             else xs.u[lo:hi], xd[lo:hi]))
 
 
@@ -100,79 +100,123 @@ def _stitched(chunks, method):
 # ------------------------------------------------------------------ fitting
 class _RowFeeder:
     """Passes rows to a BlockAccumulator on the trajectory's block grid: whole blocks go
-    through as views, a partial block is kept (copied) until the next rows complete it."""
+    through as views, a partial block is kept (copied) until the next rows complete it.
+    Rows are tuples of arrays with the same number of rows (``z, y, x_dot``)."""
 
     def __init__(self, acc: BlockAccumulator):
         self.acc = acc
-        self.z, self.y, self.rows = [], [], 0
+        self.kept, self.rows = [], 0
 
-    def add(self, z, y):
+    def add(self, *arrays):
         if self.rows:
-            if self.rows + z.shape[0] < BLOCK_ROWS:
-                self._keep(z, y)
+            if self.rows + arrays[0].shape[0] < BLOCK_ROWS:
+                self._keep(arrays)
                 return
             need = BLOCK_ROWS - self.rows
-            self.acc.add(np.concatenate([*self.z, z[:need]]), np.concatenate([*self.y, y[:need]]))
-            self.z, self.y, self.rows = [], [], 0
-            z, y = z[need:], y[need:]
-        cut = (z.shape[0] // BLOCK_ROWS) * BLOCK_ROWS
+            self.acc.add(*[np.concatenate([*old, new[:need]])
+                           for old, new in zip(zip(*self.kept, strict=True), arrays, strict=True)])
+            self.kept, self.rows = [], 0
+            arrays = [a[need:] for a in arrays]
+        cut = (arrays[0].shape[0] // BLOCK_ROWS) * BLOCK_ROWS
         if cut:
-            self.acc.add(z[:cut], y[:cut])
-        if cut < z.shape[0]:
-            self._keep(z[cut:], y[cut:])
+            self.acc.add(*[a[:cut] for a in arrays])
+        if cut < arrays[0].shape[0]:
+            self._keep([a[cut:] for a in arrays])
 
-    def _keep(self, z, y):
-        self.z.append(z.copy())
-        self.y.append(y.copy())
-        self.rows += z.shape[0]
+    def _keep(self, arrays):
+        self.kept.append([a.copy() for a in arrays])
+        self.rows += arrays[0].shape[0]
 
     def end_trajectory(self):
         if self.rows:
-            self.acc.add(np.concatenate(self.z), np.concatenate(self.y))
-        self.z, self.y, self.rows = [], [], 0
+            self.acc.add(*[np.concatenate(parts) for parts in zip(*self.kept, strict=True)])
+        self.kept, self.rows = [], 0
         self.acc.finish_trajectory()
 
 
 def stream_statistics(source: ChunkSource, step: float, setup_for: Callable, *,
-                      progress: bool | None = None, n_threads: int | None = None):
+                      sample_rows: int = 0, progress: bool | None = None,
+                      n_threads: int | None = None):
     """``(setup, stats)``: the Gram statistics of all rows of ``source``.
 
-    ``setup_for(n_states, n_inputs)`` gives the :class:`~discrepancy.models.setup.FitSetup`
-    once the first chunk shows the layout (e.g. ``model.make_setup``); every later
-    trajectory must have the same layout.
+    ``setup_for(n_states, n_inputs, sample)`` gives the
+    :class:`~discrepancy.models.setup.FitSetup` once the first ``sample_rows`` rows (over
+    trajectories, in order; at least the first chunk) have been read and validated:
+    ``sample`` holds them as trajectories, so that choices made from the data (the
+    default smoothing) see the same rows as an in-memory fit would. Every trajectory must
+    have the layout of the first.
     """
     from tqdm.auto import tqdm
 
-    setup = acc = feeder = layout = None
+    sample, trajectories = _prefetch(source, step, max(sample_rows, 1))
+    layout = sample[0][0]
+    setup = setup_for(layout.n, layout.r, [_joined(chunks) for _, chunks, _ in sample])
+    acc = BlockAccumulator(setup.library.transform, setup.new_statistics(),
+                           n_threads=n_threads)
+    feeder = _RowFeeder(acc)
     with tqdm(total=source.n_samples, unit=" samples", unit_scale=True, desc="fit",
               disable=None if progress is None else not progress) as bar:
-        for k, items in enumerate(source.trajectories()):
+        for chunks in trajectories(layout):
+            def counted(chunks=chunks):
+                for chunk in chunks:
+                    yield chunk
+                    bar.update(chunk.n_rows)
+
+            for z, y, xd in residual_rows(setup, counted()):
+                feeder.add(z, y, xd)
+            feeder.end_trajectory()
+    return setup, acc.total
+
+
+def _prefetch(source: ChunkSource, step: float, budget: int):
+    """Read (and validate) the first ``budget`` rows; returns ``(sample, trajectories)``.
+
+    ``sample``: ``[(layout, chunks read, rest of that trajectory's chunks)]``;
+    ``trajectories(layout)`` then yields every trajectory as an iterator of validated
+    chunks, the prefetched ones first, so nothing is read twice.
+    """
+    it = enumerate(source.trajectories())
+    sample, layout, rows = [], None, 0
+    for k, items in it:
+        stream = _validated(items, k, step, layout)
+        read = []
+        for lay, chunk in stream:
+            layout = lay
+            read.append(chunk)
+            rows += chunk.n_rows
+            if rows >= budget:
+                break
+        if not read:
+            raise ShapeError(f"trajectory {k} of x has no rows")
+        sample.append((layout, read, stream))
+        if rows >= budget:
+            break
+    if not sample:
+        raise ShapeError("x holds no trajectories")
+
+    def trajectories(layout):
+        for _, read, rest in sample:
+            yield _chain(read, (chunk for _, chunk in rest))
+        for k, items in it:
             stream = _validated(items, k, step, layout)
             first = next(stream, None)
             if first is None:
                 raise ShapeError(f"trajectory {k} of x has no rows")
-            if setup is None:
-                layout = first[0]
-                setup = setup_for(layout.n, layout.r)
-                acc = BlockAccumulator(setup.library.transform, setup.n_features, layout.n,
-                                       n_threads=n_threads)
-                feeder = _RowFeeder(acc)
+            yield _chain([first[1]], (chunk for _, chunk in stream))
 
-            def counted(first=first, stream=stream):
-                for _, chunk in _chain(first, stream):
-                    yield chunk
-                    bar.update(chunk.n_rows)
-
-            for z, y in residual_rows(setup, counted()):
-                feeder.add(z, y)
-            feeder.end_trajectory()
-    if setup is None:
-        raise ShapeError("x holds no trajectories")
-    return setup, acc.total
+    return sample, trajectories
 
 
-def _chain(first, rest):
-    yield first
+def _joined(chunks: list[Chunk]) -> Trajectory:
+    """The prefetched chunks of one trajectory as one Trajectory (for choices from data)."""
+    def cat(field):
+        parts = [getattr(c, field) for c in chunks]
+        return None if parts[0] is None else np.concatenate(parts)
+    return Trajectory(cat("t"), cat("x"), cat("u"), cat("x_dot"))
+
+
+def _chain(first: list, rest):
+    yield from first
     yield from rest
 
 
@@ -181,4 +225,25 @@ def chunk_statistics(model, x, *, t=None, u=None, x_dot=None):
     if u is not None or x_dot is not None:
         raise ParameterError("with chunked x, give u and x_dot inside the chunks "
                              "(Chunk(x, u=..., x_dot=...)), not as separate arguments")
-    return stream_statistics(as_source(x), step_of(t), model.make_setup)
+    return stream_statistics(as_source(x), step_of(t), _setup_for(model),
+                             sample_rows=sample_rows_of(model))
+
+
+def _setup_for(model):
+    return lambda n, r, sample: model.make_setup(n, r, sample=sample)
+
+
+def setup_from_source(model, source: ChunkSource, step: float):
+    """``model.make_setup`` from the layout and first rows of ``source`` (read, not fitted)."""
+    sample, _ = _prefetch(source, step, max(sample_rows_of(model), 1))
+    layout = sample[0][0]
+    return model.make_setup(layout.n, layout.r,
+                            sample=[_joined(chunks) for _, chunks, _ in sample])
+
+
+def sample_rows_of(model) -> int:
+    """Rows a data-driven differentiation method of ``model`` looks at (0 if none)."""
+    from .differentiation import get_differentiation_method
+
+    method = get_differentiation_method(model.differentiation_method)
+    return int(method.sample_rows) if getattr(method, "data_driven", False) else 0

@@ -1,7 +1,10 @@
 """Numerical differentiation: one registry behind one interface."""
+from .auto import AutoSmoothing
 from .base import Differentiator, available_methods, get_differentiation_method
 from .dequantise import Dequantised
 from .methods import FiniteDifference, Kalman, SavitzkyGolay, Spline, TrendFiltered
+from .spline import SmoothingSpline
 
-__all__ = ["Dequantised", "Differentiator", "FiniteDifference", "Kalman", "SavitzkyGolay", "Spline",
-           "TrendFiltered", "available_methods", "get_differentiation_method"]
+__all__ = ["AutoSmoothing", "Dequantised", "Differentiator", "FiniteDifference", "Kalman",
+           "SavitzkyGolay", "SmoothingSpline", "Spline", "TrendFiltered", "available_methods",
+           "get_differentiation_method"]

@@ -75,5 +75,6 @@ def available_methods() -> list[str]:
 def get_differentiation_method(method=None, **kwargs) -> Differentiator:
     """A Differentiator from an instance, a registered name or spec text
     (``"savitzky_golay(window_length=31)"``, with ``kwargs``), a ``{"name", "params"}``
-    mapping, or ``None`` (second-order centred finite differences, as in PySINDy)."""
-    return METHODS.create("finite_difference" if method is None else method, **kwargs)
+    mapping, or ``None``: ``"auto"``, smoothing chosen from the data
+    (:class:`~discrepancy.differentiation.auto.AutoSmoothing`)."""
+    return METHODS.create("auto" if method is None else method, **kwargs)

@@ -36,43 +36,79 @@ class SavitzkyGolay(Differentiator):
     """Savitzky–Golay smoothing and differentiation (the paper's choice).
 
     Args:
-        window_length: odd number of samples in the local polynomial fit.
-        polyorder: degree of the local polynomial, below ``window_length``.
+        window_length: odd number of samples in the local polynomial fit, or one per
+            state (a list).
+        polyorder: degree of the local polynomial, below every window length.
         smooth: if True (default, as in the paper) Θ is evaluated on the smoothed x.
 
-    Needs uniform ``t``. Ends use the polynomial fitted to the first/last window.
+    Needs uniform ``t``. Ends use the polynomial fitted to the first/last window. Long
+    windows are applied by FFT convolution (scipy ``oaconvolve``): the same filter, 3-7x
+    faster above ~100 samples on 1e6 rows (measured; direct below 64).
     """
 
     uniform_only = True
-    _parameter_constraints = {"window_length": [ODD_WINDOW],
-                              "polyorder": [Interval(Integral, 1, None)], "smooth": [bool]}
+    _parameter_constraints = {
+        "window_length": [ODD_WINDOW, Predicate(
+            lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
+                ODD_WINDOW.is_satisfied_by(w) for w in v), "a list of odd integers >= 3")],
+        "polyorder": [Interval(Integral, 1, None)], "smooth": [bool]}
 
     def __init__(self, window_length: int = 21, polyorder: int = 3, *, smooth: bool = True):
         self.window_length = window_length
         self.polyorder = polyorder
         self.smooth = smooth
 
+    def _windows(self, n: int | None = None) -> list[int]:
+        w = self.window_length
+        windows = [int(v) for v in w] if isinstance(w, (list, tuple)) else [int(w)]
+        if n is not None and len(windows) not in (1, n):
+            raise ParameterError(f"SavitzkyGolay: window_length has {len(windows)} values; x "
+                                 f"has {n} columns (give one window, or one per column)")
+        return windows * n if n is not None and len(windows) == 1 else windows
+
     def _check_params(self):
-        if self.polyorder >= self.window_length:
+        if self.polyorder >= min(self._windows()):
             raise ParameterError(f"SavitzkyGolay: polyorder must be below window_length "
                                  f"({self.window_length}); got {self.polyorder}")
 
     @property
     def min_samples(self) -> int:
         self._validate_params()
-        return int(self.window_length)
+        return max(self._windows())
 
     @property
     def halo(self) -> int:
-        return int(self.window_length) // 2
+        return max(self._windows()) // 2
 
     def _compute(self, x, t):
-        from scipy.signal import savgol_filter  # 1 s to import: only when used
-
         dt = (t[-1] - t[0]) / (len(t) - 1)
-        kw = dict(window_length=self.window_length, polyorder=self.polyorder, axis=0, mode="interp")
-        x_dot = savgol_filter(x, deriv=1, delta=dt, **kw)
-        return (savgol_filter(x, **kw) if self.smooth else x), x_dot
+        smooth, x_dot = np.empty_like(x), np.empty_like(x)
+        for j, w in enumerate(self._windows(x.shape[1])):
+            x_dot[:, j] = savgol(x[:, j], w, self.polyorder, deriv=1, delta=dt)
+            smooth[:, j] = savgol(x[:, j], w, self.polyorder) if self.smooth else x[:, j]
+        return smooth, x_dot
+
+
+def savgol(x: np.ndarray, window: int, polyorder: int, *, deriv: int = 0,
+           delta: float = 1.0) -> np.ndarray:
+    """Savitzky-Golay filter of one column with polynomial end fits (scipy's ``interp``
+    mode); long windows by FFT convolution of the same coefficients."""
+    from scipy.signal import oaconvolve, savgol_coeffs, savgol_filter  # slow to import
+
+    kw = dict(window_length=window, polyorder=polyorder, deriv=deriv, delta=delta, mode="interp")
+    if window <= DIRECT_WINDOW or len(x) < 2 * window:
+        return savgol_filter(x, **kw)
+    h = window // 2
+    out = np.empty_like(x)
+    coeffs = savgol_coeffs(window, polyorder, deriv=deriv, delta=delta, use="conv")
+    out[h:len(x) - h] = oaconvolve(x, coeffs, mode="valid")
+    out[:h] = savgol_filter(x[:window], **kw)[:h]
+    out[len(x) - h:] = savgol_filter(x[-window:], **kw)[-h:]
+    return out
+
+
+#: windows up to this length are applied directly (faster than FFT for short filters)
+DIRECT_WINDOW = 64
 
 
 class _DerivativePackage(Differentiator):

@@ -46,8 +46,10 @@ class DiscrepancyModel(Estimator):
         optimizer: sparse regression (default ``STLSQ(threshold="auto")``: no hand tuning;
             ``STLSQ(threshold=0.1)`` is PySINDy's default), or a spec such as ``"lasso"``.
         differentiation_method: a Differentiator or a spec such as
-            ``"savitzky_golay(window_length=31)"`` (default finite differences); ignored
-            when ``x_dot`` is given to :meth:`fit`.
+            ``"savitzky_golay(window_length=31)"``; default ``"auto"``: smoothing chosen
+            from the data at each fit (:class:`~discrepancy.differentiation.AutoSmoothing`,
+            the choice in ``differentiation_method_`` and ``differentiation_choice_``);
+            ignored when ``x_dot`` is given to :meth:`fit`.
         state_names: names of the n states (default ``x1 ... xn``).
         input_names: names of the r inputs (default ``u`` for one, ``u1 ... ur`` for more).
 
@@ -103,19 +105,22 @@ class DiscrepancyModel(Estimator):
         else:
             trajectories = as_trajectories(x, t, u, x_dot)
             first = trajectories[0]
-            setup = self.make_setup(first.x.shape[1], 0 if first.u is None else first.u.shape[1])
+            setup = self.make_setup(first.x.shape[1], 0 if first.u is None else first.u.shape[1],
+                                    sample=trajectories)
             stats = setup.new_statistics()
             for trajectory in trajectories:
                 setup.statistics(trajectory, into=stats)
         return self.fit_statistics(stats, setup)
 
-    def make_setup(self, n_states: int, n_inputs: int) -> FitSetup:
+    def make_setup(self, n_states: int, n_inputs: int, *, sample=None) -> FitSetup:
         """The frozen set-up (names, prior, library, optimizer, differentiation) of this
         model's parameters for ``n_states`` states and ``n_inputs`` inputs. Its
         :meth:`~FitSetup.statistics` of any number of trajectories, summed, go to
-        :meth:`fit_statistics`."""
+        :meth:`fit_statistics`. ``sample`` (a list of
+        :class:`~discrepancy.data.Trajectory`) is needed when the differentiation method
+        is chosen from the data (the default)."""
         self._validate_params()
-        return resolve_setup(self, n_states, n_inputs)
+        return resolve_setup(self, n_states, n_inputs, sample)
 
     def fit_statistics(self, stats: GramStatistics, setup: FitSetup) -> DiscrepancyModel:
         """Fit from Gram statistics computed with ``setup`` (see :meth:`make_setup`);
@@ -128,11 +133,8 @@ class DiscrepancyModel(Estimator):
                              f"has {setup.n_features} and {setup.n_states}")
         if stats.count == 0:
             raise DataError("stats hold no samples: nothing to fit")
-        if not (np.all(np.isfinite(stats.gram)) and np.all(np.isfinite(stats.rhs))):
-            raise DataError("the library or the residual overflowed on these data (non-finite "
-                            "Gram statistics); scale the data or use a smaller library")
         optimizer = copy.deepcopy(setup.optimizer)
-        optimizer.fit_gram(stats.gram, stats.rhs, n_samples=stats.count, yy=stats.yy)
+        optimizer.fit_statistics(stats)
         self._set_fit(setup, optimizer.coef_, optimizer, stats)
         return self
 
@@ -143,6 +145,7 @@ class DiscrepancyModel(Estimator):
         self.n_states_, self.n_inputs_ = setup.n_states, setup.n_inputs
         self.prior_, self.feature_library_ = setup.prior, setup.library
         self.differentiation_method_ = setup.differentiation
+        self.differentiation_choice_ = setup.choice
         self.optimizer_, self.statistics_ = optimizer, statistics
         self.feature_expressions_ = list(setup.library.feature_expressions_)
         self.coef_ = np.asarray(coef, dtype=float)

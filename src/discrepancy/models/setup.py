@@ -20,6 +20,10 @@ from ..optimizers import GramStatistics, Optimizer
 from ..symbolic import IDENTIFIER
 from .prior import Prior
 
+#: cross-validation folds kept in the statistics (contiguous segments dealt out in turn)
+N_FOLDS = 5
+MIN_SEGMENT = 512
+
 
 @dataclass(frozen=True)
 class FitSetup:
@@ -30,7 +34,10 @@ class FitSetup:
         prior: the checked prior ``f_m``.
         library: the feature library, bound to ``[*state_names, *input_names]``.
         optimizer: the sparse regression (a template; fits work on copies).
-        differentiation: turns measured states into ``(x_smooth, x_dot)``.
+        differentiation: turns measured states into ``(x_smooth, x_dot)`` (a method chosen
+            from the data is already resolved here).
+        choice: how a data-driven differentiation method was resolved (``None`` when the
+            method was given), e.g. ``{"chosen_by": "GCV", "noise_std": [...], ...}``.
     """
 
     state_names: tuple[str, ...]
@@ -39,6 +46,7 @@ class FitSetup:
     library: FeatureLibrary
     optimizer: Optimizer
     differentiation: Differentiator
+    choice: dict | None = None
 
     @property
     def variable_names(self) -> list[str]:
@@ -57,20 +65,37 @@ class FitSetup:
     def n_features(self) -> int:
         return self.library.n_features_
 
-    def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
-        """``(z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m``
-        ``(m, n)`` of one trajectory."""
+    def rows(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(z, y, x_dot)``: variables ``[x_smooth, u]`` ``(m, n + r)``, the residual
+        ``x_dot - f_m`` ``(m, n)`` and the derivatives ``(m, n)`` of one trajectory."""
         if trajectory.x_dot is None:
             xs, xd = self.differentiation(trajectory.x, trajectory.t)
         else:
             xs, xd = trajectory.x, trajectory.x_dot
         y = xd - self.prior(xs, trajectory.u)
         z = xs if trajectory.u is None else np.hstack([xs, trajectory.u])
-        return z, y
+        return z, y, xd
+
+    def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+        """``(z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m``
+        ``(m, n)`` of one trajectory."""
+        return self.rows(trajectory)[:2]
+
+    @property
+    def fold_segment(self) -> int:
+        """Rows per contiguous cross-validation segment: a power of two of at least twice
+        the differentiation window (residuals of neighbouring rows are correlated over
+        about one window) and 512, at most one accumulation block."""
+        from ..accumulate import BLOCK_ROWS
+
+        halo = self.differentiation.halo or 0
+        need = max(MIN_SEGMENT, 2 * (2 * halo + 1))
+        return min(BLOCK_ROWS, 1 << (need - 1).bit_length())
 
     def new_statistics(self) -> GramStatistics:
-        """Empty statistics of the right size (``p`` features, ``n`` targets)."""
-        return GramStatistics(self.n_features, self.n_states)
+        """Empty statistics of the right size (``p`` features, ``n`` targets), kept per
+        cross-validation fold as well (:data:`N_FOLDS` folds of ``fold_segment`` rows)."""
+        return GramStatistics(self.n_features, self.n_states, N_FOLDS, self.fold_segment)
 
     def statistics(self, trajectory: Trajectory, *,
                    into: GramStatistics | None = None) -> GramStatistics:
@@ -82,14 +107,17 @@ class FitSetup:
         from ..accumulate import accumulate
 
         stats = self.new_statistics() if into is None else into
-        z, y = self.residual(trajectory)
-        return accumulate(stats, self.library.transform, z, y)
+        z, y, x_dot = self.rows(trajectory)
+        return accumulate(stats, self.library.transform, z, y, x_dot)
 
 
-def resolve_setup(model, n_states: int, n_inputs: int) -> FitSetup:
+def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
     """The set-up of ``model``'s parameters for ``n_states`` states and ``n_inputs`` inputs:
     names checked, defaults filled in, library specs parsed and bound, copies of the
-    optimizer and differentiation method (the model's own parameters are never changed)."""
+    optimizer and differentiation method (the model's own parameters are never changed).
+
+    ``sample``: trajectories a data-driven differentiation method (the default ``"auto"``)
+    is chosen from; those with measured ``x_dot`` need none."""
     import copy
 
     from ..differentiation import get_differentiation_method
@@ -109,9 +137,20 @@ def resolve_setup(model, n_states: int, n_inputs: int) -> FitSetup:
     elif isinstance(library, str):
         library = parse_library(library)
     library = copy.deepcopy(library).fit([*states, *inputs])
+    method = copy.deepcopy(get_differentiation_method(model.differentiation_method))
+    method, choice = _resolved(method, sample)
     return FitSetup(tuple(states), tuple(inputs), Prior(model.prior, states, inputs), library,
-                    copy.deepcopy(get_optimizer(model.optimizer)),
-                    copy.deepcopy(get_differentiation_method(model.differentiation_method)))
+                    copy.deepcopy(get_optimizer(model.optimizer)), method, choice)
+
+
+def _resolved(method, sample):
+    """A data-driven method resolved on the trajectories of ``sample`` that need it."""
+    if not getattr(method, "data_driven", False) or sample is None:
+        return method, None
+    series = [(tr.t, tr.x) for tr in sample if tr.x_dot is None]
+    if not series:  # every trajectory has measured derivatives: nothing to differentiate
+        return method, None
+    return method.choose(series)
 
 
 def resolve_names(arg: str, given, k: int, stem: str, *, one) -> list[str]:

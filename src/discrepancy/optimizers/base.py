@@ -7,7 +7,7 @@ import numpy as np
 import scipy.linalg
 
 from ..base import Estimator
-from ..errors import ConvergenceError, ShapeError
+from ..errors import ConvergenceError, DataError, ShapeError
 from ..registry import Registry
 from .gram import GramStatistics
 
@@ -35,11 +35,16 @@ def solve_normal(gram: np.ndarray, rhs: np.ndarray, alpha: float = 0.0) -> np.nd
     return z / (d[:, None] if rhs.ndim == 2 else d)
 
 
+#: folds of a standalone ``fit(theta, y)`` (each made of two contiguous runs of rows)
+FIT_FOLDS = 5
+
+
 class Optimizer(Estimator, ABC):
     """A sparse regression solver ``y ≈ Θ ξ`` (scikit-learn style).
 
-    ``fit(theta, y)`` forms the Gram statistics and calls ``fit_gram``;
-    ``fit_gram(gram, rhs)`` works from accumulated statistics alone. After either,
+    ``fit(theta, y)`` forms the Gram statistics (rows taken as consecutive samples in time,
+    cut into contiguous cross-validation folds); ``fit_gram(gram, rhs)`` and
+    ``fit_statistics(stats)`` work from accumulated statistics alone. After any of them,
     ``coef_`` is ``(n_targets, n_features)`` as in PySINDy.
 
     Args (shared):
@@ -49,34 +54,53 @@ class Optimizer(Estimator, ABC):
     normalize_columns: bool = False
 
     def fit(self, theta, y) -> Optimizer:
-        """Fit on a feature matrix ``theta`` ``(m, p)`` and targets ``y`` ``(m,)`` or ``(m, n)``."""
+        """Fit on a feature matrix ``theta`` ``(m, p)`` and targets ``y`` ``(m,)`` or
+        ``(m, n)``, rows in time order."""
         from ..data.trajectory import as_2d
 
         theta = as_2d("theta", theta)
         y = as_2d("y", y, n_rows=theta.shape[0], allow_1d=True)
-        stats = GramStatistics(theta.shape[1], y.shape[1]).add(theta, y)
-        return self.fit_gram(stats.gram, stats.rhs, n_samples=stats.count, yy=stats.yy)
+        segment = max(1, -(-theta.shape[0] // (2 * FIT_FOLDS)))
+        stats = GramStatistics(theta.shape[1], y.shape[1], FIT_FOLDS, segment).add(theta, y)
+        return self.fit_statistics(stats)
 
     def fit_gram(self, gram, rhs, *, n_samples: int | None = None, yy=None) -> Optimizer:
         """Fit from ``gram = ΘᵀΘ`` ``(p, p)`` and ``rhs = Θᵀy`` ``(p, n)`` (or ``(p,)``).
 
         ``n_samples`` (m) and ``yy`` (``Σ y²`` per target, ``(n,)``) are needed only by
-        solvers that use them (Lasso's 1/m scaling, automatic thresholds).
+        solvers that use them (Lasso's 1/m scaling, automatic thresholds, which without
+        folds fall back to an information criterion).
         """
         from ..data.trajectory import as_2d
 
-        self._validate_params()
         gram = as_2d("gram", gram)
         rhs = as_2d("rhs", rhs, n_rows=gram.shape[0], allow_1d=True)
         if gram.shape[0] != gram.shape[1]:
             raise ShapeError(f"gram must be square (p, p); got {gram.shape}")
-        scale = np.ones(gram.shape[0])
+        stats = GramStatistics(gram.shape[0], rhs.shape[1])
+        stats.gram, stats.rhs, stats.count = gram, rhs, int(n_samples or 0)
+        if yy is not None:
+            stats.yy = as_2d("yy", np.reshape(yy, (1, -1)), n_cols=rhs.shape[1]).ravel()
+            stats.signal = stats.yy
+        else:
+            stats.yy = stats.signal = None
+        return self.fit_statistics(stats)
+
+    def fit_statistics(self, stats: GramStatistics) -> Optimizer:
+        """Fit from :class:`GramStatistics` (with their folds, when kept); returns self."""
+        self._validate_params()
+        for name in ("gram", "rhs", "yy"):
+            value = getattr(stats, name)
+            if value is not None and not np.all(np.isfinite(value)):
+                raise DataError(f"the statistics' {name} holds non-finite values: the library "
+                                "or the targets overflowed on these data (scale the data or "
+                                "use a smaller library)")
+        scale = np.ones(stats.p)
         if self.normalize_columns:
-            norms = np.sqrt(np.diag(gram))
+            norms = np.sqrt(np.diag(stats.gram))
             scale = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
-            gram, rhs = gram * np.outer(scale, scale), rhs * scale[:, None]
-        coef = self._solve(gram, rhs, n_samples=n_samples,
-                           yy=None if yy is None else np.asarray(yy, dtype=float).ravel())
+            stats = stats.scaled(scale)
+        coef = self._solve(stats)
         if not np.all(np.isfinite(coef)):
             raise ConvergenceError(f"{type(self).__name__} produced non-finite coefficients; "
                                    "the library columns may be collinear or overflow (try "
@@ -86,9 +110,10 @@ class Optimizer(Estimator, ABC):
         return self
 
     @abstractmethod
-    def _solve(self, gram: np.ndarray, rhs: np.ndarray, *, n_samples: int | None,
-               yy: np.ndarray | None = None) -> np.ndarray:
-        """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics."""
+    def _solve(self, stats: GramStatistics) -> np.ndarray:
+        """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics
+        (``stats.yy``, ``stats.signal`` may be None and ``stats.folds`` empty when the
+        caller only had ``ΘᵀΘ`` and ``Θᵀy``)."""
 
     _fit_hint = "fit or fit_gram"
 

@@ -37,8 +37,9 @@ class Lasso(Optimizer):
                               "tol": [Interval(Real, 0, None, closed="neither")],
                               "normalize_columns": [bool], "unbias": [bool]}
 
-    def _solve(self, gram, rhs, *, n_samples=None, yy=None):
-        m = 1 if n_samples is None else n_samples
+    def _solve(self, stats):
+        gram, rhs = stats.gram, stats.rhs
+        m = stats.count or 1
         p, n = rhs.shape
         diag = np.diag(gram).copy()
         coef = np.zeros((p, n))

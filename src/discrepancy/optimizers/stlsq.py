@@ -24,9 +24,10 @@ class STLSQ(Optimizer):
 
     Args:
         threshold: coefficients with ``|ξ| < threshold`` are set to zero (units of y / Θ);
-            ``"auto"`` picks it per target by BIC over the whole threshold path
-            (needs ``yy`` in ``fit_gram``; ``fit`` and ``DiscrepancyModel`` pass it).
-            The chosen values are in ``thresholds_``.
+            ``"auto"`` picks it per target by cross-validation over contiguous blocks of
+            samples along the whole threshold path (see
+            :mod:`discrepancy.optimizers.selection`). The chosen values are in
+            ``thresholds_``, the scored path in ``selection_``.
         alpha: ridge weight ``α`` in ``|y - Θξ|² + α|ξ|²`` during thresholding.
         max_iter: maximum thresholding iterations.
         normalize_columns: threshold on coefficients of unit-norm columns.
@@ -45,15 +46,15 @@ class STLSQ(Optimizer):
                               "alpha": [NON_NEGATIVE], "max_iter": [Interval(Integral, 1, None)],
                               "normalize_columns": [bool], "unbias": [bool]}
 
-    def _solve(self, gram, rhs, *, n_samples=None, yy=None):
+    def _solve(self, stats):
         if self.threshold != "auto":
-            self.thresholds_ = np.full(rhs.shape[1], float(self.threshold))
-            return self._solve_fixed(gram, rhs)
-        if yy is None or n_samples is None:
+            self.thresholds_ = np.full(stats.n, float(self.threshold))
+            return self._solve_fixed(stats.gram, stats.rhs)
+        if stats.yy is None or not stats.count:
             raise ParameterError("threshold='auto' needs the targets' sums of squares: call "
                                  "fit(theta, y), or fit_gram(gram, rhs, n_samples=m, yy=Σy²)")
         from .selection import select_thresholds
-        coef, self.thresholds_ = select_thresholds(self, gram, rhs, yy, n_samples)
+        coef, self.thresholds_, self.selection_ = select_thresholds(self, stats)
         return coef
 
     def _solve_fixed(self, gram, rhs):
