@@ -53,7 +53,7 @@ def test_analytic_derivatives(name):
     inner = slice(cut, len(t) - cut) if cut else slice(None)
     assert err[inner].max() < tol_interior
     # on noise-free data smoothing must not move x visibly
-    assert np.max(np.abs(x_smooth - x)) < 1e-3
+    assert np.max(np.abs(x_smooth - x)[inner]) < 1e-3
 
 
 @pytest.mark.parametrize("name", ["finite_difference", "savitzky_golay", "spline"])
