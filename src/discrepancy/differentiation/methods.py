@@ -12,6 +12,7 @@ import numpy as np
 from ..constraints import Integral, Interval, Predicate, Real
 from ..errors import ParameterError
 from .base import Differentiator, register
+from .savgol import savgol
 
 #: an odd window of at least 3 samples (Savitzky-Golay smoothers)
 ODD_WINDOW = Predicate(lambda w: isinstance(w, (int, np.integer)) and not isinstance(w, bool)
@@ -41,9 +42,9 @@ class SavitzkyGolay(Differentiator):
         polyorder: degree of the local polynomial, below every window length.
         smooth: if True (default, as in the paper) Θ is evaluated on the smoothed x.
 
-    Needs uniform ``t``. Ends use the polynomial fitted to the first/last window. Long
-    windows are applied by FFT convolution (scipy ``oaconvolve``): the same filter, 3-7x
-    faster above ~100 samples on 1e6 rows (measured; direct below 64).
+    Needs uniform ``t``. Ends use the polynomial fitted to the first/last window. The
+    filters are computed by :mod:`discrepancy.differentiation.savgol` (accurate for long
+    windows and high degrees, where scipy's are not).
     """
 
     uniform_only = True
@@ -87,28 +88,6 @@ class SavitzkyGolay(Differentiator):
             x_dot[:, j] = savgol(x[:, j], w, self.polyorder, deriv=1, delta=dt)
             smooth[:, j] = savgol(x[:, j], w, self.polyorder) if self.smooth else x[:, j]
         return smooth, x_dot
-
-
-def savgol(x: np.ndarray, window: int, polyorder: int, *, deriv: int = 0,
-           delta: float = 1.0) -> np.ndarray:
-    """Savitzky-Golay filter of one column with polynomial end fits (scipy's ``interp``
-    mode); long windows by FFT convolution of the same coefficients."""
-    from scipy.signal import oaconvolve, savgol_coeffs, savgol_filter  # slow to import
-
-    kw = dict(window_length=window, polyorder=polyorder, deriv=deriv, delta=delta, mode="interp")
-    if window <= DIRECT_WINDOW or len(x) < 2 * window:
-        return savgol_filter(x, **kw)
-    h = window // 2
-    out = np.empty_like(x)
-    coeffs = savgol_coeffs(window, polyorder, deriv=deriv, delta=delta, use="conv")
-    out[h:len(x) - h] = oaconvolve(x, coeffs, mode="valid")
-    out[:h] = savgol_filter(x[:window], **kw)[:h]
-    out[len(x) - h:] = savgol_filter(x[-window:], **kw)[-h:]
-    return out
-
-
-#: windows up to this length are applied directly (faster than FFT for short filters)
-DIRECT_WINDOW = 64
 
 
 class _DerivativePackage(Differentiator):
