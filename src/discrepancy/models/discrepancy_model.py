@@ -227,9 +227,15 @@ class DiscrepancyModel(Estimator):
         return equations(self, precision)
 
     def print(self, precision: int = 3) -> None:
-        """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2``."""
+        """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2``, then, when
+        the derivatives were estimated with a method chosen from the data, a ``#`` line
+        saying which and why."""
         for name, eq in zip(self.state_names_, self.equations(precision), strict=True):
             print(f"({name})' = {eq}")
+        from .export import choice_line
+        line = choice_line(self)
+        if line:
+            print(line)
 
     def score(self, x, t=None, *args, u=None, x_dot=None, metric: str = "r2") -> float:
         """Goodness of fit on data: ``"r2"`` or ``"rmse"`` of derivatives, or
@@ -303,6 +309,7 @@ class DiscrepancyModel(Estimator):
         optimizer = copy.deepcopy(setup.optimizer)
         optimizer.coef_ = fields["coefficients"]
         model._set_fit(setup, fields["coefficients"], optimizer, None)
+        model.differentiation_choice_ = fields["differentiation_choice"]
         return model
 
     def save(self, path) -> None:

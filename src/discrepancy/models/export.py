@@ -100,3 +100,14 @@ def equations(model, precision: int = 3) -> list[str]:
                              ("-" if c < 0 else "") + term)
         out.append(" ".join(parts) if parts else f"{0:.{precision}f}")
     return out
+
+
+def choice_line(model) -> str:
+    """``# derivatives: <method>, chosen by GCV from the data; noise std ≈ [...]`` for a
+    model whose differentiation was chosen from the data (else ``""``)."""
+    choice = getattr(model, "differentiation_choice_", None)
+    if not choice:
+        return ""
+    noise = ", ".join(f"{v:.3g}" for v in choice.get("noise_std", []))
+    return (f"# derivatives: {model.differentiation_method_!r}, chosen by {choice['chosen_by']} "
+            f"from the data; noise std of the states ≈ [{noise}]")

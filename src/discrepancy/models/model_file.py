@@ -55,7 +55,8 @@ def encode(model) -> dict:
         "user_functions": sorted(model.feature_library_.user_functions()),
         "optimizer": _spec_or_none(OPTIMIZERS, model.optimizer_),
         "differentiation_method": _spec_or_none(METHODS, model.differentiation_method_),
-        "fit": {"n_samples": None if stats is None else int(stats.count)},
+        "fit": {"n_samples": None if stats is None else int(stats.count),
+                "differentiation_choice": _plain(model.differentiation_choice_)},
         "metadata": {"optimizer": repr(model.optimizer_),
                      "feature_library": repr(model.feature_library),
                      "differentiation_method": repr(model.differentiation_method_)},
@@ -130,10 +131,7 @@ def decode(doc, *, prior=None, functions=None) -> dict:
     from ..libraries import CustomLibrary
 
     version = _version(doc)
-    if version >= 2 and not (isinstance(doc["fit"], dict) and set(doc["fit"]) == {"n_samples"}
-                             and (doc["fit"]["n_samples"] is None or
-                                  type(doc["fit"]["n_samples"]) is int)):
-        raise _fail("fit must be {'n_samples': an integer or null}")
+    choice = _fit_record(doc["fit"]) if version >= 2 else None
     states, inputs = _names(doc, "state_names"), _names(doc, "input_names")
     declared = doc["user_functions"]
     if not isinstance(declared, list) or not all(isinstance(f, str) and IDENTIFIER.match(f)
@@ -154,7 +152,47 @@ def decode(doc, *, prior=None, functions=None) -> dict:
             "prior": _prior(doc["prior"], states, allowed, prior),
             "library": CustomLibrary(features, functions=used or None),
             "optimizer": _component(doc, "optimizer", version),
-            "differentiation_method": _component(doc, "differentiation_method", version)}
+            "differentiation_method": _component(doc, "differentiation_method", version),
+            "differentiation_choice": choice}
+
+
+def _fit_record(fit) -> dict | None:
+    """The checked ``fit`` record; returns the stored differentiation choice (or None)."""
+    if not (isinstance(fit, dict) and set(fit) == {"n_samples", "differentiation_choice"}
+            and (fit["n_samples"] is None or type(fit["n_samples"]) is int)):
+        raise _fail("fit must be {'n_samples': an integer or null, 'differentiation_choice': "
+                    "an object or null}")
+    choice = fit["differentiation_choice"]
+    if choice is not None and not (isinstance(choice, dict) and _is_plain(choice, 0)):
+        raise _fail("fit.differentiation_choice must be an object of names, numbers and "
+                    "lists")
+    return choice
+
+
+def _is_plain(value, depth: int) -> bool:
+    """JSON of bounded depth whose numbers are finite (what a choice record may hold)."""
+    if depth > 4:
+        return False
+    if isinstance(value, dict):
+        return len(value) <= 1000 and all(isinstance(k, str) and len(k) <= 100 and
+                                          _is_plain(v, depth + 1) for k, v in value.items())
+    if isinstance(value, list):
+        return len(value) <= 1000 and all(_is_plain(v, depth + 1) for v in value)
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return isinstance(value, (str, int, bool, type(None))) and \
+        (not isinstance(value, str) or len(value) <= 1000)
+
+
+def _plain(value):
+    """``value`` with numpy numbers as Python numbers (for the JSON file)."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
 
 
 def _version(doc) -> int:
