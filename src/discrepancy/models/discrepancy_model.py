@@ -221,16 +221,19 @@ class DiscrepancyModel(Estimator):
         self.check_is_fitted()
         return [feature_name(e, self.variable_names_) for e in self.feature_expressions_]
 
-    def equations(self, precision: int = 3) -> list[str]:
-        """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``."""
+    def equations(self, precision: int = 3, *, uncertainty=None) -> list[str]:
+        """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``; with
+        ``uncertainty`` (:meth:`bootstrap`) each coefficient as ``0.400 ± 0.004`` (one
+        bootstrap standard deviation)."""
         from .export import equations
-        return equations(self, precision)
+        return equations(self, precision, uncertainty)
 
-    def print(self, precision: int = 3) -> None:
-        """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2``, then, when
-        the derivatives were estimated with a method chosen from the data, a ``#`` line
-        saying which and why."""
-        for name, eq in zip(self.state_names_, self.equations(precision), strict=True):
+    def print(self, precision: int = 3, *, uncertainty=None) -> None:
+        """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2`` (with
+        ``± std`` when ``uncertainty`` is given), then, when the derivatives were estimated
+        with a method chosen from the data, a ``#`` line saying which and why."""
+        lines = self.equations(precision, uncertainty=uncertainty)
+        for name, eq in zip(self.state_names_, lines, strict=True):
             print(f"({name})' = {eq}")
         from .export import choice_line
         line = choice_line(self)
@@ -259,6 +262,38 @@ class DiscrepancyModel(Estimator):
         keywords_only("bootstrap", args, "u, x_dot and the options")
         return bootstrap(self, x, t, u, x_dot, n_resamples=n_resamples,
                          block_length=block_length, method=method, seed=seed)
+
+    def predict_interval(self, x, u=None, *, uncertainty, level: float = 0.95):
+        """Pointwise ``level`` band ``(low, high)``, each ``(m, n)``, of the hybrid
+        derivatives ``f_m + g`` over the bootstrap's resampled coefficients
+        (``uncertainty`` = :meth:`bootstrap` of this model)."""
+        from .uncertainty import predict_interval
+        return predict_interval(self, x, u, uncertainty, level)
+
+    def simulate_interval(self, x0, t, *args, u=None, uncertainty, level: float = 0.95,
+                          n_draws: int | None = 100, seed: int = 0, **integrator_kws):
+        """Pointwise ``level`` band ``(low, high)``, each ``(k, n)``, of trajectories
+        simulated with ``n_draws`` of the bootstrap's resampled models (all with ``None``).
+        It holds the coefficients' uncertainty, not the measurement noise. Resampled models
+        that diverge are left out, with a warning."""
+        from .uncertainty import simulate_interval
+        keywords_only("simulate_interval", args, "u and the options")
+        self.check_is_fitted()
+        return simulate_interval(self, x0, t, u, uncertainty, level, n_draws, seed,
+                                 **integrator_kws)
+
+    def with_coefficients(self, coef) -> DiscrepancyModel:
+        """A copy of this fitted model with coefficients ``coef`` ``(n, p)`` (e.g. one
+        bootstrap resample); shares the set-up."""
+        self.check_is_fitted()
+        coef = np.asarray(coef, dtype=float)
+        if coef.shape != self.coef_.shape or not np.all(np.isfinite(coef)):
+            raise ShapeError(f"coef must be finite with shape {self.coef_.shape}; got "
+                             f"{coef.shape}")
+        other = copy.copy(self)
+        other._set_fit(self.setup_, coef, self.optimizer_, None)
+        other.differentiation_choice_ = self.differentiation_choice_
+        return other
 
     # ------------------------------------------------------------------ export
     def to_sympy(self, part: str | None = None):

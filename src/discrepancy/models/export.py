@@ -83,19 +83,28 @@ def to_casadi(model, part=None):
     return ca.Function("f", [x, u], [xdot], ["x", "u"], ["xdot"])
 
 
-def equations(model, precision: int = 3) -> list[str]:
-    """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``, one per state."""
+def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
+    """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``, one per state;
+    with ``uncertainty``, coefficients as ``(0.400 ± 0.004)``."""
     from ..constraints import Integral, Interval, validate_params
 
     validate_params("equations", {"precision": precision},
                     {"precision": [Interval(Integral, 0, 16)]})
     names = model.get_feature_names()
+    std = None
+    if uncertainty is not None:
+        from .uncertainty import _check_uncertainty
+        _check_uncertainty(model, uncertainty)
+        std = uncertainty.std
     out = []
-    for row in model.coef_:
+    for i, row in enumerate(model.coef_):
         parts = [] if model.prior is None else ["prior"]
-        for c, name in zip(row, names, strict=True):
+        for j, (c, name) in enumerate(zip(row, names, strict=True)):
             if c != 0:
-                term = f"{abs(c):.{precision}f}" + ("" if name == "1" else f" {name}")
+                size = f"{abs(c):.{precision}f}"
+                if std is not None:
+                    size = f"({size} ± {std[i, j]:.{precision}f})"
+                term = size + ("" if name == "1" else f" {name}")
                 parts.append(("- " if c < 0 else "+ ") + term if parts else
                              ("-" if c < 0 else "") + term)
         out.append(" ".join(parts) if parts else f"{0:.{precision}f}")

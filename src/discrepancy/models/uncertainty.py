@@ -80,30 +80,54 @@ class CoefficientUncertainty:
 
 
 def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int | None = None):
-    """Per-block Gram statistics of the fitted model's residuals; returns (blocks, length)."""
+    """Per-block Gram statistics of the fitted model's residuals: ``(blocks, folds, length)``.
+
+    Blocks are contiguous and nest in the fit's cross-validation segments (their length
+    divides the segment), so ``folds[b]`` is the fold of block ``b`` and a resample's fold
+    statistics are sums of its blocks: the automatic threshold is chosen again, by the
+    same cross-validation, in every resample.
+    """
+    setup = model.setup_
     trajectories = as_trajectories(x, t, u, x_dot)
     total = sum(tr.n_samples for tr in trajectories)
-    halo = model.differentiation_method_.halo or 0
-    # blocks span at least two derivative windows: shorter blocks cut the negative
-    # correlation lobes of differentiated noise and overstate the variance
-    length = block_length or max(total // 40, 2 * (2 * halo + 1), 20)
-    if not isinstance(length, (int, np.integer)) or length < 2:
-        raise ParameterError(f"block_length must be an integer >= 2; got {block_length!r}")
-    blocks = []
+    segment = setup.fold_segment
+    length = block_length or _default_block(total, segment, setup.differentiation.halo or 0)
+    if not isinstance(length, (int, np.integer)) or isinstance(length, bool) or length < 2 \
+            or segment % length:
+        raise ParameterError(f"block_length must be an integer >= 2 that divides the fit's "
+                             f"cross-validation segment ({segment} rows); got {block_length!r}")
+    n_folds = setup.new_statistics().n_folds
+    blocks, folds, row = [], [], 0
     for tr in trajectories:
-        z, y = model.residual(tr)
-        for start in range(0, len(z), length):
-            rows = slice(start, start + length)
-            stats = GramStatistics(model.feature_library_.n_features_, model.n_states_)
-            blocks.append(stats.add(model.feature_library_.transform(z[rows]), y[rows]))
+        z, y, xd = setup.rows(tr)
+        start = 0
+        while start < len(z):  # blocks on the grid of data rows, so they nest in segments
+            stop = min(len(z), start + length - (row + start) % length)
+            stats = GramStatistics(setup.n_features, setup.n_states)
+            rows = slice(start, stop)
+            blocks.append(stats.add(setup.library.transform(z[rows]), y[rows], xd[rows]))
+            folds.append(((row + start) // segment) % n_folds)
+            start = stop
+        row += len(z)
     if len(blocks) < 10:
         raise ParameterError(f"only {len(blocks)} blocks of {length} samples; the bootstrap "
                              "needs at least 10 (use a smaller block_length or more data)")
-    return blocks, int(length)
+    return blocks, np.array(folds), int(length)
+
+
+def _default_block(total: int, segment: int, halo: int) -> int:
+    """At least two derivative windows (shorter blocks cut the negative correlation lobes
+    of differentiated noise and overstate the variance) when the data allow 20 blocks,
+    never longer than the segment; a power of two, so it divides the segment."""
+    want = max(2 * (2 * halo + 1), 16)
+    fit = max(2, total // 20)
+    length = min(want, fit, segment)
+    return 1 << (length.bit_length() - 1)
 
 
 def _wild(gram, rhs, yy, coef, rng):
-    """Resampled ``(ΘᵀΘ, Θᵀy*, Σy*²)`` with block signs, from per-block statistics."""
+    """Per-block resampled ``Θ_bᵀy*`` ``(B, p, n)`` and ``Σ y*²`` ``(B, n)``: block residuals
+    flipped by random signs (fixed design)."""
     xi = coef.T                                              # (p, n)
     fitted = np.einsum("bpq,qn->bpn", gram, xi)              # Θ_bᵀ Θ_b ξ̂
     cross = rhs - fitted                                     # Θ_bᵀ e_b
@@ -111,13 +135,19 @@ def _wild(gram, rhs, yy, coef, rng):
     res_sq = yy - 2 * np.einsum("pn,bpn->bn", xi, rhs) + fit_sq  # |e_b|²
     mixed = np.einsum("pn,bpn->bn", xi, cross)               # ξ̂ᵀ Θ_bᵀ e_b
     s = rng.choice([-1.0, 1.0], size=len(gram))
-    return (gram.sum(0), fitted.sum(0) + np.tensordot(s, cross, 1),
-            (fit_sq + res_sq).sum(0) + 2 * s @ mixed)
+    return fitted + s[:, None, None] * cross, fit_sq + res_sq + 2 * s[:, None] * mixed
 
 
-def _pairs(gram, rhs, yy, counts, rng):
-    w = np.bincount(rng.integers(0, len(gram), len(gram)), minlength=len(gram))
-    return np.tensordot(w, gram, 1), np.tensordot(w, rhs, 1), w @ yy, int(w @ counts)
+def _resampled_statistics(gram, rhs, yy, signal, counts, folds, n_folds, segment):
+    """GramStatistics with folds from per-block sums (``(B, ...)`` arrays)."""
+    stats = GramStatistics(gram.shape[1], rhs.shape[2], n_folds, segment)
+    for f, fold in enumerate(stats.folds):
+        pick = folds == f
+        fold.gram, fold.rhs = gram[pick].sum(0), rhs[pick].sum(0)
+        fold.yy, fold.signal = yy[pick].sum(0), signal[pick].sum(0)
+        fold.count = int(counts[pick].sum())
+    stats._sum_folds()
+    return stats
 
 
 def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
@@ -132,20 +162,85 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
         raise ParameterError(f"n_resamples must be an integer >= 2; got {n_resamples!r}")
     if method not in ("wild", "pairs"):
         raise ParameterError(f"method must be 'wild' or 'pairs'; got {method!r}")
-    blocks, length = block_statistics(model, x, t, u, x_dot, block_length=block_length)
+    blocks, folds, length = block_statistics(model, x, t, u, x_dot, block_length=block_length)
     gram = np.stack([b.gram for b in blocks])
     rhs = np.stack([b.rhs for b in blocks])
     yy = np.stack([b.yy for b in blocks])
+    signal = np.stack([b.signal for b in blocks])
     counts = np.array([b.count for b in blocks])
+    template = model.setup_.new_statistics()
     rng = np.random.default_rng(seed)
     samples = np.empty((n_resamples, *model.coef_.shape))
     for r in tqdm(range(n_resamples), desc="bootstrap", disable=None, leave=False):
         if method == "wild":
-            g, b, sq, m = (*_wild(gram, rhs, yy, model.coef_, rng), int(counts.sum()))
+            b, sq = _wild(gram, rhs, yy, model.coef_, rng)
+            stats = _resampled_statistics(gram, b, sq, signal, counts, folds,
+                                          template.n_folds, template.segment)
         else:
-            g, b, sq, m = _pairs(gram, rhs, yy, counts, rng)
+            w = np.bincount(rng.integers(0, len(gram), len(gram)), minlength=len(gram))
+            stats = _resampled_statistics(gram * w[:, None, None], rhs * w[:, None, None],
+                                          yy * w[:, None], signal * w[:, None], counts * w,
+                                          folds, template.n_folds, template.segment)
         opt = copy.deepcopy(model.optimizer_)
-        opt.fit_gram(g, b, n_samples=m, yy=sq)
+        opt.fit_statistics(stats)
         samples[r] = opt.coef_
     return CoefficientUncertainty(model.coef_.copy(), samples, list(model.state_names_),
                                   model.get_feature_names(), length)
+
+
+def _check_uncertainty(model, uncertainty) -> None:
+    if not isinstance(uncertainty, CoefficientUncertainty) or \
+            uncertainty.samples.shape[1:] != model.coef_.shape or \
+            list(uncertainty.feature_names) != model.get_feature_names():
+        raise ParameterError("uncertainty must be this model's bootstrap(...) result "
+                             f"(coefficients {model.coef_.shape}); got "
+                             f"{type(uncertainty).__name__}")
+
+
+def quantiles(curves: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pointwise ``level`` band ``(low, high)`` of resampled curves ``(R, ...)``, ignoring
+    resamples that are NaN (diverged)."""
+    if not isinstance(level, (float, int)) or not 0 < level < 1:
+        raise ParameterError(f"level must be a number in (0, 1); got {level!r}")
+    tail = (1 - level) / 2
+    low, high = np.nanquantile(curves, [tail, 1 - tail], axis=0)
+    return low, high
+
+
+def predict_interval(model, x, u, uncertainty, level):
+    """See :meth:`DiscrepancyModel.predict_interval`."""
+    _check_uncertainty(model, uncertainty)
+    x, u = model._variables(x, u)
+    theta = model.feature_library_.transform(x if u is None else np.hstack([x, u]))
+    prior = model.prior_(x, u)
+    curves = prior[None] + np.einsum("mp,rnp->rmn", theta, uncertainty.samples)
+    return quantiles(curves, level)
+
+
+def simulate_interval(model, x0, t, u, uncertainty, level, n_draws, seed, **integrator_kws):
+    """See :meth:`DiscrepancyModel.simulate_interval`."""
+    import warnings
+
+    from tqdm.auto import tqdm
+
+    from ..errors import ConvergenceError
+
+    _check_uncertainty(model, uncertainty)
+    samples = uncertainty.samples
+    if n_draws is not None:
+        if not isinstance(n_draws, (int, np.integer)) or n_draws < 2:
+            raise ParameterError(f"n_draws must be an integer >= 2 or None; got {n_draws!r}")
+        pick = np.random.default_rng(seed).choice(len(samples), min(n_draws, len(samples)),
+                                                  replace=False)
+        samples = samples[pick]
+    runs, failed = [], 0
+    for coef in tqdm(samples, desc="simulate", disable=None, leave=False):
+        try:
+            runs.append(model.with_coefficients(coef).simulate(x0, t, u=u, **integrator_kws))
+        except ConvergenceError:
+            failed += 1
+            runs.append(np.full((len(np.atleast_1d(t)), model.n_states_), np.nan))
+    if failed:
+        warnings.warn(f"{failed} of {len(samples)} resampled models diverged; the band is "
+                      "taken over the others", stacklevel=3)
+    return quantiles(np.array(runs), level)
