@@ -36,7 +36,7 @@ CASES = {
 
 def test_every_registered_method_is_tested():
     # Dequantised needs quantised data (tests/test_dequantise.py); auto: tests/test_auto.py
-    assert set(available_methods()) == set(CASES) | {"dequantised", "auto"}
+    assert set(available_methods()) == set(CASES) | {"dequantised", "auto", "weak"}  # test_weak
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

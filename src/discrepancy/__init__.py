@@ -23,6 +23,7 @@ from .differentiation import (
     SmoothingSpline,
     Spline,
     TrendFiltered,
+    WeakForm,
 )
 from .energy import EnergyDiscrepancy
 from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
@@ -34,6 +35,6 @@ __all__ = [
     "CustomLibrary", "Dequantised", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
     "FourierLibrary", "GramStatistics",
     "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spline",
-    "TrendFiltered",
+    "TrendFiltered", "WeakForm",
     "errors", "io", "load_model", "systems",
 ]

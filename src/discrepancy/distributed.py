@@ -43,17 +43,14 @@ def _block(rows, x, *rest, setup, step, halo, n_total, trajectory, offset):
     if xd is not None:
         xd = check_array("x_dot", xd, where=where, row_offset=int(rows[0]))
     t = rows * step
+    lo, hi = 0, len(rows)
     if xd is None:
-        xs, xd = setup.differentiation(x, t)
         lo = 0 if rows[0] == 0 else halo
         hi = len(rows) if rows[-1] == n_total - 1 else len(rows) - halo
-    else:
-        xs, lo, hi = x, 0, len(rows)
-    z, y, xd = setup.rows(Trajectory(t[lo:hi], xs[lo:hi], None if u is None else u[lo:hi],
-                                     xd[lo:hi]))
+    z, y, xd = (a[lo:hi] for a in setup.rows(Trajectory(t, x, u, xd)))
     stats = setup.new_statistics()
     stats.count = offset + int(rows[lo])  # the data row of this block's first row (folds)
-    acc = BlockAccumulator(setup.library.transform, stats, n_threads=1)
+    acc = BlockAccumulator(setup.transform, stats, n_threads=1)
     acc.add(z, y, xd)
     acc.finish_trajectory()
     stats.count -= offset + int(rows[lo])

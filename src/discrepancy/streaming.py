@@ -31,7 +31,6 @@ Memory is bounded by about two chunks plus a 4096-row block of Θ.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import replace
 
 import numpy as np
 
@@ -63,22 +62,23 @@ def _concat(a: Chunk, b: Chunk) -> Chunk:
 def residual_rows(setup, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, ...]]:
     """Yield ``(z, y, x_dot)`` for consecutive rows of one trajectory, equal to
     ``setup.rows`` of the whole trajectory (chunks validated)."""
-    for xs, xd, lo, hi in _stitched(chunks, setup.differentiation):
+    for window, lo, hi in _stitched(chunks, setup.differentiation):
         if hi > lo:
-            yield setup.rows(Trajectory(xs.t[lo:hi], xs.x[lo:hi], None if xs.u is None
-                                            else xs.u[lo:hi], xd[lo:hi]))
+            rows = setup.rows(Trajectory(window.t, window.x, window.u, window.x_dot))
+            yield tuple(a[lo:hi] for a in rows)
 
 
 def _stitched(chunks, method):
-    """Yield ``(window, x_dot_or_smoothed, lo, hi)``; rows ``lo:hi`` of the window are exact.
+    """Yield ``(window, lo, hi)``: rows ``lo:hi`` of ``setup.rows(window)`` are exactly
+    those of the whole trajectory.
 
-    A window (carried rows plus one chunk) is differentiated once the next chunk shows it
-    is not the trajectory's last; chunks with ``x_dot`` pass straight through.
+    A window (carried rows plus one chunk) is passed on once the next chunk shows it is not
+    the trajectory's last; chunks with ``x_dot`` pass straight through.
     """
     window, first = None, True
     for chunk in chunks:
         if chunk.x_dot is not None:
-            yield chunk, chunk.x_dot, 0, chunk.n_rows
+            yield chunk, 0, chunk.n_rows
             continue
         h = method.halo
         if h is None:
@@ -88,13 +88,11 @@ def _stitched(chunks, method):
                 "use FiniteDifference() or SavitzkyGolay(), or compute x_dot first and stream "
                 "it with the chunks")
         if window is not None and window.n_rows >= max(method.min_samples, 2 * h + 1):
-            xs, xd = method(window.x, window.t)  # not the last window: a chunk follows
-            yield replace(window, x=xs), xd, (0 if first else h), window.n_rows - h
+            yield window, (0 if first else h), window.n_rows - h  # a chunk follows
             window, first = window.rows(window.n_rows - 2 * h), False
         window = chunk if window is None else _concat(window, chunk)
     if window is not None:
-        xs, xd = method(window.x, window.t)
-        yield replace(window, x=xs), xd, (0 if first else method.halo), window.n_rows
+        yield window, (0 if first else method.halo), window.n_rows
 
 
 # ------------------------------------------------------------------ fitting
@@ -151,8 +149,7 @@ def stream_statistics(source: ChunkSource, step: float, setup_for: Callable, *,
     sample, trajectories = _prefetch(source, step, max(sample_rows, 1))
     layout = sample[0][0]
     setup = setup_for(layout.n, layout.r, [_joined(chunks) for _, chunks, _ in sample])
-    acc = BlockAccumulator(setup.library.transform, setup.new_statistics(),
-                           n_threads=n_threads)
+    acc = BlockAccumulator(setup.transform, setup.new_statistics(), n_threads=n_threads)
     feeder = _RowFeeder(acc)
     with tqdm(total=source.n_samples, unit=" samples", unit_scale=True, desc="fit",
               disable=None if progress is None else not progress) as bar:

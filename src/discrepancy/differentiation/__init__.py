@@ -4,7 +4,8 @@ from .base import Differentiator, available_methods, get_differentiation_method
 from .dequantise import Dequantised
 from .methods import FiniteDifference, Kalman, SavitzkyGolay, Spline, TrendFiltered
 from .spline import SmoothingSpline
+from .weak import WeakForm
 
 __all__ = ["AutoSmoothing", "Dequantised", "Differentiator", "FiniteDifference", "Kalman",
-           "SavitzkyGolay", "SmoothingSpline", "Spline", "TrendFiltered", "available_methods",
-           "get_differentiation_method"]
+           "SavitzkyGolay", "SmoothingSpline", "Spline", "TrendFiltered", "WeakForm",
+           "available_methods", "get_differentiation_method"]

@@ -22,11 +22,11 @@ def score(model, x, t=None, u=None, x_dot=None, *, metric: str = "r2") -> float:
         sim = model.simulate(tr.x[0], tr.t, u=tr.u)
         return float(np.linalg.norm(sim - tr.x) / np.linalg.norm(tr.x))
     truth, pred = [], []
-    for tr in trajectories:
-        z, y = model.residual(tr)
-        xs = z[:, :model.n_states_]
-        truth.append(y + model.prior_(xs, tr.u))
-        pred.append(model.predict(xs, tr.u))
+    setup = model.setup_
+    for tr in trajectories:  # derivatives (or, in the weak form, their integrals)
+        z, y, signal = setup.rows(tr)
+        truth.append(signal)
+        pred.append(signal - y + setup.transform(z) @ model.coef_.T)
     truth, pred = np.vstack(truth), np.vstack(pred)
     if metric == "rmse":
         return float(np.sqrt(np.mean((truth - pred) ** 2)))

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.trajectory import Trajectory
-from ..differentiation import Differentiator
+from ..differentiation import Differentiator, WeakForm
 from ..errors import ParameterError, ShapeError
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
@@ -66,8 +66,13 @@ class FitSetup:
         return self.library.n_features_
 
     def rows(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(z, y, x_dot)``: variables ``[x_smooth, u]`` ``(m, n + r)``, the residual
-        ``x_dot - f_m`` ``(m, n)`` and the derivatives ``(m, n)`` of one trajectory."""
+        """``(z, y, x_dot)`` of one trajectory: what :attr:`transform` turns into the
+        regression's rows of Θ (the variables ``[x_smooth, u]`` ``(m, n + r)``), the
+        residual ``x_dot - f_m`` ``(m, n)`` and the derivatives ``(m, n)``. In the weak form
+        (:class:`~discrepancy.differentiation.WeakForm`) every quantity is integrated against
+        each sample's test function instead, and ``z`` is already Θ."""
+        if trajectory.x_dot is None and isinstance(self.differentiation, WeakForm):
+            return self._weak_rows(trajectory)
         if trajectory.x_dot is None:
             xs, xd = self.differentiation(trajectory.x, trajectory.t)
         else:
@@ -75,6 +80,21 @@ class FitSetup:
         y = xd - self.prior(xs, trajectory.u)
         z = xs if trajectory.u is None else np.hstack([xs, trajectory.u])
         return z, y, xd
+
+    def _weak_rows(self, trajectory: Trajectory):
+        x, u = trajectory.x, trajectory.u
+        theta = self.library.transform(x if u is None else np.hstack([x, u]))
+        values = np.hstack([theta, self.prior(x, u)])
+        integral, by_parts = self.differentiation.rows(x, trajectory.t, values)
+        p = theta.shape[1]
+        return integral[:, :p], by_parts - integral[:, p:], by_parts
+
+    @property
+    def transform(self):
+        """Turns the ``z`` of :meth:`rows` into Θ (``transform(z, out=...)``)."""
+        if isinstance(self.differentiation, WeakForm):
+            return _copy_into
+        return self.library.transform
 
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m``
@@ -108,7 +128,14 @@ class FitSetup:
 
         stats = self.new_statistics() if into is None else into
         z, y, x_dot = self.rows(trajectory)
-        return accumulate(stats, self.library.transform, z, y, x_dot)
+        return accumulate(stats, self.transform, z, y, x_dot)
+
+
+def _copy_into(theta: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarray:
+    if out is None:
+        return theta
+    out[...] = theta
+    return out
 
 
 def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:

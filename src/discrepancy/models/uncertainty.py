@@ -105,7 +105,7 @@ def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int 
             stop = min(len(z), start + length - (row + start) % length)
             stats = GramStatistics(setup.n_features, setup.n_states)
             rows = slice(start, stop)
-            blocks.append(stats.add(setup.library.transform(z[rows]), y[rows], xd[rows]))
+            blocks.append(stats.add(setup.transform(z[rows]), y[rows], xd[rows]))
             folds.append(((row + start) // segment) % n_folds)
             start = stop
         row += len(z)

@@ -1,6 +1,7 @@
 """Base of the sparse regression solvers: everything is solved on the p×p system."""
 from __future__ import annotations
 
+import warnings
 from abc import ABC, abstractmethod
 
 import numpy as np
@@ -18,7 +19,8 @@ def solve_normal(gram: np.ndarray, rhs: np.ndarray, alpha: float = 0.0) -> np.nd
     The system is equilibrated by the column norms first (``D G D``), which leaves
     the solution unchanged but makes the Cholesky factorisation usable for
     polynomial libraries whose columns differ by many orders of magnitude.
-    Falls back to a minimum-norm least-squares solve when ``G + αI`` is singular.
+    Falls back to a minimum-norm least-squares solve when ``G + αI`` is singular or so
+    ill-conditioned that scipy would warn (dense candidate supports often are).
     """
     a = gram + alpha * np.eye(gram.shape[0])
     d = np.sqrt(np.diag(a))
@@ -26,9 +28,11 @@ def solve_normal(gram: np.ndarray, rhs: np.ndarray, alpha: float = 0.0) -> np.nd
     scaled = a / np.outer(d, d)
     b = rhs / (d[:, None] if rhs.ndim == 2 else d)
     try:
-        z = scipy.linalg.solve(scaled, b, assume_a="pos", check_finite=False)
-    except (scipy.linalg.LinAlgError, ValueError):
-        z = scipy.linalg.lstsq(scaled, b, check_finite=False)[0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", scipy.linalg.LinAlgWarning)
+            z = scipy.linalg.solve(scaled, b, assume_a="pos", check_finite=False)
+    except (scipy.linalg.LinAlgError, scipy.linalg.LinAlgWarning, ValueError):
+        z = scipy.linalg.lstsq(scaled, b, check_finite=False)[0]  # singular or nearly
     else:
         if not np.all(np.isfinite(z)):
             z = scipy.linalg.lstsq(scaled, b, check_finite=False)[0]
