@@ -76,6 +76,8 @@ CASES = {
                                           x=X[:300]),
     "Kalman": _differentiator_case(lambda: dc.Kalman(alpha=0.1), x=X[:300]),
     "SmoothingSpline": _differentiator_case(dc.SmoothingSpline),
+    "WeakForm": Case(lambda: dc.WeakForm(61), lambda w: w, lambda w: np.hstack(w.rows(X, T, X)),
+                     lambda w: None),
     "AutoSmoothing": _differentiator_case(dc.AutoSmoothing),
     "Dequantised": _differentiator_case(
         lambda: dc.Dequantised(resolution=0.01), x=np.round(X / 0.01) * 0.01),
