@@ -15,9 +15,10 @@ least two smoothing windows), so spurious terms do not help there.
 
 The choice is the sparsest support whose error is within one standard error (over folds)
 of the best (the "one-standard-error rule"), with every fold's error floored at
-:data:`FLOOR` times the mean square of the derivatives: on noise-free data, terms that
-improve the fit only below that level are numerical error of the derivative, not
-dynamics, so exact data give exactly sparse models. Without folds (``fit_gram`` given only
+:data:`FLOOR` times the mean square of the derivatives (or of the targets, if larger): on
+noise-free data, terms that improve the fit only below that level are numerical error of
+the derivative, or rounding in the error's own computation from sums (which loses about
+``eps * yᵀy``), not dynamics, so exact data give exactly sparse models. Without folds (``fit_gram`` given only
 totals) the Bayesian information criterion is used instead.
 """
 from __future__ import annotations
@@ -29,8 +30,8 @@ import numpy as np
 
 from .base import solve_normal
 
-#: fold errors below FLOOR * mean(x_dot^2) are numerical (a relative RMS error of 1e-7)
-FLOOR = 1e-14
+#: fold errors below FLOOR * mean(x_dot^2) are numerical (a relative RMS error of 1e-6)
+FLOOR = 1e-12
 
 
 def candidate_thresholds(gram: np.ndarray, rhs_column: np.ndarray, alpha: float) -> np.ndarray:
@@ -95,7 +96,7 @@ def select_thresholds(stlsq, stats) -> tuple[np.ndarray, np.ndarray, list[dict]]
     for i in range(n):
         path = threshold_path(stlsq, stats.gram, stats.rhs[:, i])
         if use_cv:
-            floor = FLOOR * stats.signal[i] / stats.count
+            floor = FLOOR * max(stats.signal[i], stats.yy[i]) / stats.count
             scores = [np.maximum(cross_validated_errors(stats, i, s, alpha), floor)
                       for _, s in path]
             error = np.array([e.mean() for e in scores])
