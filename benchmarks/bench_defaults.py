@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 import pysindy as ps
-from _common import DT, lorenz, lorenz_trajectories, machine, median_time, table
+from _common import DT, lorenz_trajectories, machine, median_time, table
 from scipy.integrate import solve_ivp
 
 import discrepancy as dc

@@ -18,8 +18,8 @@ of the best (the "one-standard-error rule"), with every fold's error floored at
 :data:`FLOOR` times the mean square of the derivatives (or of the targets, if larger): on
 noise-free data, terms that improve the fit only below that level are numerical error of
 the derivative, or rounding in the error's own computation from sums (which loses about
-``eps * yᵀy``), not dynamics, so exact data give exactly sparse models. Without folds (``fit_gram`` given only
-totals) the Bayesian information criterion is used instead.
+``eps * yᵀy``), not dynamics, so exact data give exactly sparse models. Without folds
+(``fit_gram`` given only totals) the Bayesian information criterion is used instead.
 """
 from __future__ import annotations
 
