@@ -27,11 +27,11 @@ from .differentiation import (
 )
 from .energy import EnergyDiscrepancy
 from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
-from .models import DiscrepancyModel, load_model
+from .models import Constraints, DiscrepancyModel, load_model
 from .optimizers import STLSQ, GramStatistics, Lasso
 
 __all__ = [
-    "AutoSmoothing", "CSVFiles", "Chunk", "HDF5Source", "NPZFiles", "ZarrSource",
+    "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "HDF5Source", "NPZFiles", "ZarrSource",
     "CustomLibrary", "Dequantised", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
     "FourierLibrary", "GramStatistics",
     "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spline",

@@ -47,6 +47,10 @@ class ConvergenceError(DiscrepancyError, RuntimeError):
     """A solver (ODE, optimiser, IPOPT) did not reach a valid solution."""
 
 
+class ConvergenceWarning(UserWarning):
+    """An iterative solver stopped at its iteration limit; its last iterate is used."""
+
+
 def describe(value) -> str:
     """Short description of a value for error messages: type and shape, never its content."""
     shape = getattr(value, "shape", None)

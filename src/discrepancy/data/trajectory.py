@@ -86,7 +86,7 @@ def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
     out, n, r = [], None, None
     for i in range(k):
         tag = "" if k == 1 else f"[{i}]"
-        xi = as_2d(f"x{tag}", xs[i])
+        xi = as_2d(f"x{tag}", xs[i], allow_1d=True)  # 1-D: one state, as in PySINDy
         if n is None:
             n = xi.shape[1]
         elif xi.shape[1] != n:
@@ -104,6 +104,7 @@ def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
                 raise ShapeError(f"every u must have {r} input columns; u{tag} has {ui.shape}")
         if (ui is None) != (us[0] is None):
             raise ShapeError(f"u must be given for all trajectories or none; u{tag} differs")
-        xdi = None if xds[i] is None else as_2d(f"x_dot{tag}", xds[i], n_rows=m, n_cols=n)
+        xdi = None if xds[i] is None else as_2d(f"x_dot{tag}", xds[i], n_rows=m, n_cols=n,
+                                                allow_1d=True)
         out.append(Trajectory(ti, xi, ui, xdi))
     return out

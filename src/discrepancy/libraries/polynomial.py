@@ -20,22 +20,30 @@ class PolynomialLibrary(BaseLibrary):
         degree: highest total degree (>= 0).
         include_bias: include the constant column ``1``.
         interaction_only: only products of distinct variables (no powers).
+        include_interaction: ``False`` keeps only powers of single variables (``x1^2``,
+            no ``x1 x2``), as PySINDy's option of that name.
         variables: names or indices of z = [x, u] to use; ``None`` = all.
     """
 
     _parameter_constraints = {"degree": [Interval(Integral, 0, None)], "include_bias": [bool],
-                              "interaction_only": [bool], "variables": VARIABLES}
+                              "interaction_only": [bool], "include_interaction": [bool],
+                              "variables": VARIABLES}
 
     def __init__(self, degree: int = 2, *, include_bias: bool = True,
-                 interaction_only: bool = False, variables=None):
+                 interaction_only: bool = False, include_interaction: bool = True,
+                 variables=None):
         super().__init__(variables=variables)
         self.degree = degree
         self.include_bias = include_bias
         self.interaction_only = interaction_only
+        self.include_interaction = include_interaction
 
     def _combos(self, k: int) -> list[tuple[int, ...]]:
         pick = combinations if self.interaction_only else combinations_with_replacement
         start = 0 if self.include_bias else 1
+        if not self.include_interaction:  # powers of one variable each, PySINDy's order
+            return [c for d in range(start, self.degree + 1) for c in pick(range(k), d)
+                    if len(set(c)) <= 1]
         return [c for d in range(start, self.degree + 1) for c in pick(range(k), d)]
 
     def _expressions(self, symbols):

@@ -10,12 +10,13 @@ from ..constraints import InstanceOf, Predicate, is_callable
 from ..data.chunks import data_kind
 from ..data.trajectory import Trajectory, as_2d, as_trajectories
 from ..differentiation import Differentiator
-from ..errors import DataError, ParameterError, ShapeError
+from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..symbolic import compile_numpy, feature_name
 from .setup import FitSetup, resolve_setup
 from .simulation import integrate
+from .term_constraints import Constraints
 
 _SPEC = InstanceOf(str, "a spec string")
 _NAMES = [None, InstanceOf(str, "a name"),
@@ -52,6 +53,9 @@ class DiscrepancyModel(Estimator):
             ignored when ``x_dot`` is given to :meth:`fit`.
         state_names: names of the n states (default ``x1 ... xn``).
         input_names: names of the r inputs (default ``u`` for one, ``u1 ... ur`` for more).
+        constraints: a :class:`~discrepancy.models.term_constraints.Constraints`: equations
+            without correction, terms confined to some equations, linear (in)equalities on
+            coefficients by name (needs an optimizer that takes constraints: STLSQ).
 
     Fitted attributes: ``coef_`` ``(n, p)``, ``setup_`` (the :class:`FitSetup` used),
     ``statistics_`` (its Gram statistics), ``optimizer_`` (the fitted optimizer) and the
@@ -66,19 +70,21 @@ class DiscrepancyModel(Estimator):
         "optimizer": [None, InstanceOf(Optimizer, "an Optimizer"), _SPEC],
         "differentiation_method": [None, InstanceOf(Differentiator, "a Differentiator"), _SPEC],
         "state_names": _NAMES, "input_names": _NAMES,
+        "constraints": [None, InstanceOf(Constraints, "a discrepancy.Constraints")],
     }
     _fit_hint = "fit(x, t)"
     _fitted_attribute = "coef_"
 
     def __init__(self, prior=None, feature_library: FeatureLibrary | str | None = None,
                  optimizer=None, differentiation_method=None, *, state_names=None,
-                 input_names=None):
+                 input_names=None, constraints=None):
         self.prior = prior
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method
         self.state_names = state_names
         self.input_names = input_names
+        self.constraints = constraints
 
     # ----------------------------------------------------------------- fitting
     def fit(self, x, t=None, *args, u=None, x_dot=None) -> DiscrepancyModel:
@@ -149,6 +155,9 @@ class DiscrepancyModel(Estimator):
         self.optimizer_, self.statistics_ = optimizer, statistics
         self.feature_expressions_ = list(setup.library.feature_expressions_)
         self.coef_ = np.asarray(coef, dtype=float)
+        converged = getattr(optimizer, "converged_", None)
+        self.converged_ = None if converged is None else dict(zip(
+            self.state_names_, np.asarray(converged, dtype=bool).tolist(), strict=True))
         active = np.flatnonzero(np.any(self.coef_ != 0, axis=0))
         functions = setup.library.user_functions()
         self._active_terms = [compile_numpy(self.feature_expressions_[j], self.variable_names_,
@@ -167,7 +176,7 @@ class DiscrepancyModel(Estimator):
 
     def _variables(self, x, u) -> tuple[np.ndarray, np.ndarray | None]:
         self.check_is_fitted()
-        x = as_2d("x", x, n_cols=self.n_states_)
+        x = as_2d("x", x, n_cols=self.n_states_, allow_1d=self.n_states_ == 1)
         if self.n_inputs_ == 0:
             if u is not None:
                 raise ShapeError("u was given but the model was fitted without inputs")
@@ -184,14 +193,25 @@ class DiscrepancyModel(Estimator):
         return theta @ self._active_coef
 
     def discrepancy(self, x, u=None) -> np.ndarray:
-        """The learned correction ``g(x, u)``, ``(m, n)``."""
+        """The learned correction ``g(x, u)``, ``(m, n)`` (a list for a list of ``x``)."""
+        if isinstance(x, (list, tuple)):
+            return [self.discrepancy(xi, ui) for xi, ui in _pairs(x, u)]
         x, u = self._variables(x, u)
         return self._g(x if u is None else np.hstack([x, u]))
 
     def predict(self, x, u=None) -> np.ndarray:
-        """Hybrid model derivatives ``f_m(x, u) + g(x, u)``, ``(m, n)``."""
+        """Hybrid model derivatives ``f_m(x, u) + g(x, u)``, ``(m, n)``; a list of ``x``
+        (and of ``u``) gives a list, as in PySINDy."""
+        if isinstance(x, (list, tuple)):
+            return [self.predict(xi, ui) for xi, ui in _pairs(x, u)]
         x, u = self._variables(x, u)
         return self.prior_(x, u) + self._g(x if u is None else np.hstack([x, u]))
+
+    @property
+    def complexity(self) -> int:
+        """Number of nonzero coefficients (PySINDy's ``complexity``)."""
+        self.check_is_fitted()
+        return int(np.count_nonzero(self.coef_))
 
     def simulate(self, x0, t, *args, u=None, **integrator_kws) -> np.ndarray:
         """Trajectory of the hybrid model from ``x0`` ``(n,)`` at times ``t`` ``(k,)``.
@@ -228,21 +248,30 @@ class DiscrepancyModel(Estimator):
         from .export import equations
         return equations(self, precision, uncertainty)
 
-    def print(self, precision: int = 3, *, uncertainty=None) -> None:
+    def print(self, precision: int = 3, *, lhs=None, uncertainty=None) -> None:
         """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2`` (with
-        ``± std`` when ``uncertainty`` is given), then, when the derivatives were estimated
-        with a method chosen from the data, a ``#`` line saying which and why."""
+        ``± std`` when ``uncertainty`` is given; ``lhs``: a list of left-hand sides to
+        print instead of ``(x1)'``, ...), then, when the derivatives were estimated with a
+        method chosen from the data, a ``#`` line saying which and why."""
         lines = self.equations(precision, uncertainty=uncertainty)
-        for name, eq in zip(self.state_names_, lines, strict=True):
-            print(f"({name})' = {eq}")
+        if lhs is None:
+            lhs = [f"({name})'" for name in self.state_names_]
+        elif not isinstance(lhs, (list, tuple)) or len(lhs) != self.n_states_ or \
+                not all(isinstance(s, str) for s in lhs):
+            raise ParameterError(f"lhs must be a list of {self.n_states_} strings (one per "
+                                 f"state); got {describe(lhs)}")
+        for name, eq in zip(lhs, lines, strict=True):
+            print(f"{name} = {eq}")
         from .export import choice_line
         line = choice_line(self)
         if line:
             print(line)
 
-    def score(self, x, t=None, *args, u=None, x_dot=None, metric: str = "r2") -> float:
-        """Goodness of fit on data: ``"r2"`` or ``"rmse"`` of derivatives, or
-        ``"trajectory"``: ``‖x_sim − x‖ / ‖x‖`` simulating from ``x[0]`` (one trajectory)."""
+    def score(self, x, t=None, *args, u=None, x_dot=None, metric="r2") -> float:
+        """Goodness of fit on data: ``"r2"`` (mean over states) or ``"rmse"`` of the
+        derivatives, a callable ``metric(truth, prediction)`` of them (e.g. a
+        ``sklearn.metrics`` function), or ``"trajectory"``: ``‖x_sim − x‖ / ‖x‖``
+        simulating from ``x[0]`` (one trajectory)."""
         from .scoring import score
         keywords_only("score", args, "u, x_dot and metric")
         self.check_is_fitted()
@@ -352,6 +381,15 @@ class DiscrepancyModel(Estimator):
         destroys an existing file)."""
         from .model_file import write_json
         write_json(path, self.to_state())
+
+
+def _pairs(x: list, u):
+    """``(x_i, u_i)`` of a list of trajectories (``u`` a matching list or None)."""
+    if u is None:
+        return [(xi, None) for xi in x]
+    if not isinstance(u, (list, tuple)) or len(u) != len(x):
+        raise ShapeError(f"u must be a list of {len(x)} arrays like x; got {describe(u)}")
+    return list(zip(x, u, strict=True))
 
 
 def load_model(path, prior=None, *, functions=None) -> DiscrepancyModel:

@@ -9,10 +9,11 @@ from ..errors import ParameterError, ShapeError
 METRICS = ("r2", "rmse", "trajectory")
 
 
-def score(model, x, t=None, u=None, x_dot=None, *, metric: str = "r2") -> float:
+def score(model, x, t=None, u=None, x_dot=None, *, metric="r2") -> float:
     """See :meth:`DiscrepancyModel.score`."""
-    if metric not in METRICS:
-        raise ParameterError(f"metric must be one of {', '.join(METRICS)}; got {metric!r}")
+    if not callable(metric) and metric not in METRICS:
+        raise ParameterError(f"metric must be one of {', '.join(METRICS)} or a callable "
+                             f"metric(truth, prediction) -> float; got {metric!r}")
     trajectories = as_trajectories(x, t, u, x_dot)
     if metric == "trajectory":
         if len(trajectories) != 1:
@@ -28,6 +29,13 @@ def score(model, x, t=None, u=None, x_dot=None, *, metric: str = "r2") -> float:
         truth.append(signal)
         pred.append(signal - y + setup.transform(z) @ model.coef_.T)
     truth, pred = np.vstack(truth), np.vstack(pred)
+    if truth.size == 0:
+        raise ShapeError("score needs at least one sample")
+    if callable(metric):  # e.g. sklearn.metrics.mean_absolute_error, as PySINDy allows
+        value = np.asarray(metric(truth, pred), dtype=float)
+        if value.ndim != 0 or not np.isfinite(value):
+            raise ParameterError(f"metric must return one finite number; got {value!r}")
+        return float(value)
     if metric == "rmse":
         return float(np.sqrt(np.mean((truth - pred) ** 2)))
     ss_res = np.sum((truth - pred) ** 2, axis=0)

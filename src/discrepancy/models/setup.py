@@ -166,8 +166,15 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
     library = copy.deepcopy(library).fit([*states, *inputs])
     method = copy.deepcopy(get_differentiation_method(model.differentiation_method))
     method, choice = _resolved(method, sample)
+    optimizer = copy.deepcopy(get_optimizer(model.optimizer))
+    if model.constraints is not None:
+        if "constraints" not in optimizer.get_params(deep=False):
+            raise ParameterError(f"constraints need an optimizer that takes them (STLSQ); "
+                                 f"{type(optimizer).__name__} does not")
+        optimizer.set_params(constraints=model.constraints.compile(
+            states, library.get_feature_names()))
     return FitSetup(tuple(states), tuple(inputs), Prior(model.prior, states, inputs), library,
-                    copy.deepcopy(get_optimizer(model.optimizer)), method, choice)
+                    optimizer, method, choice)
 
 
 def _resolved(method, sample):

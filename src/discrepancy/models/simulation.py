@@ -28,11 +28,15 @@ def input_law(u, t: np.ndarray, n_inputs: int, *, hold: str = "linear") -> Calla
     if u is None:
         raise ShapeError(f"u is required: the model has {n_inputs} inputs")
     if callable(u):
-        probe = np.atleast_1d(np.asarray(u(float(t[0])), dtype=float))
-        if probe.shape != (n_inputs,):
-            raise ShapeError(f"u(t) must return an array of shape ({n_inputs},); "
-                             f"got {probe.shape}")
-        return lambda tau: np.atleast_1d(np.asarray(u(tau), dtype=float))
+        def law(tau):  # checked at every call: a law may change shape or go NaN later
+            value = np.asarray(u(tau), dtype=float)
+            if value.size != n_inputs or value.ndim > 2 or not np.all(np.isfinite(value)):
+                raise ShapeError(f"u(t) must return {n_inputs} finite value(s), shape "
+                                 f"({n_inputs},) or (1, {n_inputs}); at t = {tau:.6g} it "
+                                 f"returned shape {value.shape}: {value.ravel()[:4]}")
+            return value.reshape(n_inputs)
+        law(float(t[0]))
+        return law
     samples = as_2d("u", u, n_rows=len(t), n_cols=n_inputs, allow_1d=True)
     if hold == "zoh":
         def held(tau):

@@ -104,7 +104,7 @@ class Optimizer(Estimator, ABC):
             norms = np.sqrt(np.diag(stats.gram))
             scale = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
             stats = stats.scaled(scale)
-        coef = self._solve(stats)
+        coef = self._solve(stats, scale)
         if not np.all(np.isfinite(coef)):
             raise ConvergenceError(f"{type(self).__name__} produced non-finite coefficients; "
                                    "the library columns may be collinear or overflow (try "
@@ -114,10 +114,11 @@ class Optimizer(Estimator, ABC):
         return self
 
     @abstractmethod
-    def _solve(self, stats: GramStatistics) -> np.ndarray:
+    def _solve(self, stats: GramStatistics, scale: np.ndarray) -> np.ndarray:
         """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics
         (``stats.yy``, ``stats.signal`` may be None and ``stats.folds`` empty when the
-        caller only had ``ΘᵀΘ`` and ``Θᵀy``)."""
+        caller only had ``ΘᵀΘ`` and ``Θᵀy``); ``scale`` ``(p,)`` is the column scaling
+        applied (``ξ = scale * ξ_scaled``), for solvers with constraints in original units."""
 
     _fit_hint = "fit or fit_gram"
 

@@ -1,10 +1,12 @@
 """The l1-penalised problem of the paper's eq. (3), solved on the Gram system."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ..constraints import Integral, Interval, Real
-from ..errors import ConvergenceError
+from ..errors import ConvergenceWarning
 from .base import Optimizer, register
 
 
@@ -37,29 +39,33 @@ class Lasso(Optimizer):
                               "tol": [Interval(Real, 0, None, closed="neither")],
                               "normalize_columns": [bool], "unbias": [bool]}
 
-    def _solve(self, stats):
+    def _solve(self, stats, scale):
         gram, rhs = stats.gram, stats.rhs
-        m = stats.count or 1
-        p, n = rhs.shape
-        diag = np.diag(gram).copy()
-        coef = np.zeros((p, n))
-        penalty = self.alpha * m
-        for _ in range(self.max_iter):
-            biggest_step = 0.0
-            for j in range(p):
-                if diag[j] == 0:
-                    continue
-                rho = rhs[j] - gram[j] @ coef + diag[j] * coef[j]
-                new = np.sign(rho) * np.maximum(np.abs(rho) - penalty, 0.0) / diag[j]
-                biggest_step = max(biggest_step, float(np.max(np.abs(new - coef[j]))))
-                coef[j] = new
-            if biggest_step <= self.tol * max(float(np.max(np.abs(coef))), 1e-300):
-                break
-        else:
-            raise ConvergenceError(f"Lasso did not converge in {self.max_iter} sweeps; raise "
-                                   "max_iter or use normalize_columns=True")
-        coef = coef.T
+        penalty = self.alpha * (stats.count or 1)
+        results = [self._descend(gram, rhs[:, i], penalty) for i in range(rhs.shape[1])]
+        self.converged_ = np.array([ok for _, ok in results])
+        if not self.converged_.all():  # as scikit-learn: the last iterate, with a warning
+            warnings.warn(f"Lasso did not converge in {self.max_iter} sweeps for target(s) "
+                          f"{np.flatnonzero(~self.converged_).tolist()}; raise max_iter, "
+                          "loosen tol or use normalize_columns=True", ConvergenceWarning,
+                          stacklevel=4)
+        coef = np.array([c for c, _ in results])
         if self.unbias:
             from .stlsq import STLSQ
             coef = STLSQ._refit(gram, rhs, coef != 0)
         return coef
+
+    def _descend(self, gram, rhs, penalty) -> tuple[np.ndarray, bool]:
+        """Cyclic coordinate descent for one target: ``(coef (p,), converged)``."""
+        diag = np.diag(gram)
+        coef = np.zeros(len(rhs))
+        for _ in range(self.max_iter):
+            biggest_step = 0.0
+            for j in np.flatnonzero(diag):
+                rho = rhs[j] - gram[j] @ coef + diag[j] * coef[j]
+                new = np.sign(rho) * max(abs(rho) - penalty, 0.0) / diag[j]
+                biggest_step = max(biggest_step, abs(new - coef[j]))
+                coef[j] = new
+            if biggest_step <= self.tol * max(float(np.max(np.abs(coef))), 1e-300):
+                return coef, True
+        return coef, False

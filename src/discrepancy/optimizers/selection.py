@@ -29,14 +29,19 @@ from copy import copy
 import numpy as np
 
 from .base import solve_normal
+from .linear_constraints import LinearConstraints
 
 #: fold errors below FLOOR * mean(x_dot^2) are numerical (a relative RMS error of 1e-6)
 FLOOR = 1e-12
 
 
-def candidate_thresholds(gram: np.ndarray, rhs_column: np.ndarray, alpha: float) -> np.ndarray:
-    """Thresholds just above each coefficient magnitude of the full ridge solution (and 0)."""
-    full = np.abs(solve_normal(gram, rhs_column, alpha))
+def candidate_thresholds(gram: np.ndarray, rhs_column: np.ndarray, alpha: float,
+                         allowed: np.ndarray | None = None) -> np.ndarray:
+    """Thresholds just above each coefficient magnitude of the full ridge solution on the
+    ``allowed`` terms (and 0)."""
+    s = np.ones(len(rhs_column), bool) if allowed is None else allowed
+    full = np.abs(solve_normal(gram[np.ix_(s, s)], rhs_column[s], alpha)) if s.any() \
+        else np.zeros(0)
     levels = np.unique(full[full > 0])
     return np.concatenate([[0.0], levels * (1 + 1e-9)])
 
@@ -46,16 +51,18 @@ def bic(rss: float, k: int, m: int) -> float:
     return m * np.log(max(rss, 1e-300) / m) + k * np.log(m)
 
 
-def threshold_path(stlsq, gram, rhs_column) -> list[tuple[float, np.ndarray]]:
+def threshold_path(stlsq, gram, rhs_column, mask=None) -> list[tuple[float, np.ndarray]]:
     """``(threshold, support)`` along the path, one entry per distinct support (sparser
-    as the threshold grows; the last is empty)."""
+    as the threshold grows; the last is empty). ``mask``: the target's ``LinearConstraints``
+    of one equation (terms it may use)."""
     path, seen = [], set()
-    for threshold in candidate_thresholds(gram, rhs_column, stlsq.alpha):
+    allowed = None if mask is None else mask.allowed[0]
+    for threshold in candidate_thresholds(gram, rhs_column, stlsq.alpha, allowed):
         solver = copy(stlsq)
         solver.threshold = float(threshold)
         with warnings.catch_warnings():  # an empty model is a legitimate candidate
             warnings.simplefilter("ignore")
-            support = solver._solve_fixed(gram, rhs_column[:, None])[0] != 0
+            support = solver._solve_fixed(gram, rhs_column[:, None], mask)[0] != 0
         key = support.tobytes()
         if key not in seen:
             seen.add(key)
@@ -82,8 +89,10 @@ def cross_validated_errors(stats, i: int, support: np.ndarray, alpha: float) -> 
     return errors
 
 
-def select_thresholds(stlsq, stats) -> tuple[np.ndarray, np.ndarray, list[dict]]:
-    """Per target, the selected STLSQ solution over the threshold path.
+def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.ndarray,
+                                                                 list[dict]]:
+    """Per target, the selected STLSQ solution over the threshold path (within the
+    ``constraints``' masks; their linear parts are for the caller's final refit).
 
     Returns ``(coef (n, p), thresholds (n,), selection)``; ``selection[i]`` describes the
     scored path of target ``i``: ``thresholds``, ``n_terms``, ``error`` (cross-validated
@@ -94,7 +103,9 @@ def select_thresholds(stlsq, stats) -> tuple[np.ndarray, np.ndarray, list[dict]]
     use_cv = len(stats.usable_folds()) >= 2
     alpha = 0.0 if stlsq.unbias else stlsq.alpha
     for i in range(n):
-        path = threshold_path(stlsq, stats.gram, stats.rhs[:, i])
+        mask = None if constraints is None else LinearConstraints(
+            1, p, constraints.allowed[i:i + 1].copy())
+        path = threshold_path(stlsq, stats.gram, stats.rhs[:, i], mask)
         if use_cv:
             floor = FLOOR * max(stats.signal[i], stats.yy[i]) / stats.count
             scores = [np.maximum(cross_validated_errors(stats, i, s, alpha), floor)
@@ -114,7 +125,7 @@ def select_thresholds(stlsq, stats) -> tuple[np.ndarray, np.ndarray, list[dict]]
             warnings.simplefilter("ignore")
             solver = copy(stlsq)
             solver.threshold = threshold
-            coef[i] = solver._solve_fixed(stats.gram, stats.rhs[:, i:i + 1])[0]
+            coef[i] = solver._solve_fixed(stats.gram, stats.rhs[:, i:i + 1], mask)[0]
         chosen_thresholds[i] = threshold
         selection.append({"thresholds": [t for t, _ in path],
                           "n_terms": [int(s.sum()) for _, s in path],

@@ -11,9 +11,10 @@ import warnings
 
 import numpy as np
 
-from ..constraints import Integral, Interval, Options, Real
-from ..errors import ParameterError
+from ..constraints import InstanceOf, Integral, Interval, Options, Real
+from ..errors import ParameterError, ShapeError
 from .base import Optimizer, register, solve_normal
+from .linear_constraints import LinearConstraints, constrained_solve
 
 NON_NEGATIVE = Interval(Real, 0, None)
 
@@ -32,34 +33,56 @@ class STLSQ(Optimizer):
         max_iter: maximum thresholding iterations.
         normalize_columns: threshold on coefficients of unit-norm columns.
         unbias: refit the final support without the ridge term (PySINDy's default).
+        constraints: a :class:`~discrepancy.optimizers.linear_constraints.LinearConstraints`
+            (terms each equation may use; linear equalities and inequalities on the
+            coefficients, PySINDy's "target" order), honoured by every solve. Coefficients
+            in an equality constraint are never thresholded away. ``DiscrepancyModel``
+            builds them from names (:class:`discrepancy.Constraints`).
     """
 
     def __init__(self, threshold: float = 0.1, alpha: float = 0.05, *, max_iter: int = 20,
-                 normalize_columns: bool = False, unbias: bool = True):
+                 normalize_columns: bool = False, unbias: bool = True, constraints=None):
         self.threshold = threshold
         self.alpha = alpha
         self.max_iter = max_iter
         self.normalize_columns = normalize_columns
         self.unbias = unbias
+        self.constraints = constraints
 
     _parameter_constraints = {"threshold": [NON_NEGATIVE, Options(["auto"])],
                               "alpha": [NON_NEGATIVE], "max_iter": [Interval(Integral, 1, None)],
-                              "normalize_columns": [bool], "unbias": [bool]}
+                              "normalize_columns": [bool], "unbias": [bool],
+                              "constraints": [None, InstanceOf(LinearConstraints,
+                                                               "LinearConstraints")]}
 
-    def _solve(self, stats):
+    def _solve(self, stats, scale):
+        constraints = self._constraints(stats, scale)
         if self.threshold != "auto":
             self.thresholds_ = np.full(stats.n, float(self.threshold))
-            return self._solve_fixed(stats.gram, stats.rhs)
+            return self._solve_fixed(stats.gram, stats.rhs, constraints)
         if stats.yy is None or not stats.count:
             raise ParameterError("threshold='auto' needs the targets' sums of squares: call "
                                  "fit(theta, y), or fit_gram(gram, rhs, n_samples=m, yy=Σy²)")
         from .selection import select_thresholds
-        coef, self.thresholds_, self.selection_ = select_thresholds(self, stats)
+        coef, self.thresholds_, self.selection_ = select_thresholds(self, stats, constraints)
+        if constraints.has_linear:  # the chosen supports, refitted under the constraints
+            keep = (coef != 0) | (constraints.involved() & constraints.allowed)
+            coef = constrained_solve(stats.gram, stats.rhs, keep, constraints)
         return coef
 
-    def _solve_fixed(self, gram, rhs):
+    def _constraints(self, stats, scale) -> LinearConstraints:
+        """The constraints for these statistics, in the solver's (column-scaled) units."""
+        c = self.constraints or LinearConstraints(stats.n, stats.p)
+        if (c.n, c.p) != (stats.n, stats.p):
+            raise ShapeError(f"constraints are for {c.n} equations of {c.p} terms; the data "
+                             f"have {stats.n} and {stats.p}")
+        return c.scaled(scale)
+
+    def _solve_fixed(self, gram, rhs, constraints=None):
         p, n = rhs.shape
-        ind = np.ones((n, p), dtype=bool)
+        constraints = constraints or LinearConstraints(n, p)
+        keep = constraints.involved() & constraints.allowed
+        ind = constraints.allowed.copy()
         coef = np.zeros((n, p))
         for _ in range(self.max_iter):
             if not ind.any():
@@ -67,27 +90,28 @@ class STLSQ(Optimizer):
                               stacklevel=3)
                 break
             previous = ind.copy()
-            coef = np.zeros((n, p))
-            for i in range(n):
-                s = ind[i]
-                if not s.any():
-                    continue
-                coef[i, s] = solve_normal(gram[np.ix_(s, s)], rhs[s, i], self.alpha)
-                ind[i] = np.abs(coef[i]) >= self.threshold
-                coef[i, ~ind[i]] = 0.0
+            if constraints.has_linear:
+                coef = constrained_solve(gram, rhs, ind, constraints, self.alpha)
+            else:
+                coef = self._refit(gram, rhs, ind, self.alpha)
+            ind = ((np.abs(coef) >= self.threshold) | keep) & constraints.allowed
+            coef[~ind] = 0.0
             if np.array_equal(ind, previous):
                 break
         else:
             warnings.warn(f"STLSQ did not converge after {self.max_iter} iterations",
                           stacklevel=3)
         if self.unbias:
-            coef = self._refit(gram, rhs, np.abs(coef) > 1e-14)
+            support = (np.abs(coef) > 1e-14) | keep
+            coef = constrained_solve(gram, rhs, support, constraints) if constraints.has_linear \
+                else self._refit(gram, rhs, support)
         return coef
 
     @staticmethod
-    def _refit(gram, rhs, support):
+    def _refit(gram, rhs, support, alpha: float = 0.0):
+        """Least squares (ridge ``alpha``) of each target on its own support ``(n, p)``."""
         coef = np.zeros(support.shape)
         for i, s in enumerate(support):
             if s.any():
-                coef[i, s] = solve_normal(gram[np.ix_(s, s)], rhs[s, i])
+                coef[i, s] = solve_normal(gram[np.ix_(s, s)], rhs[s, i], alpha)
         return coef
