@@ -16,8 +16,8 @@ from scipy.optimize import nnls
 
 import discrepancy as dc
 from discrepancy.energy import dissipation
-from discrepancy.experiments import pendulum_energy as pe
 from discrepancy.systems.double_pendulum import DoublePendulum
+from discrepancy_paper.experiments import pendulum_energy as pe
 
 TRUE_TERMS = {"viscous joint 1", "viscous joint 2"}
 

@@ -13,8 +13,8 @@ import numpy as np
 from _common import machine, table
 
 import discrepancy as dc
-from discrepancy.experiments import pendulum_energy as pe
 from discrepancy.systems.double_pendulum import DoublePendulum
+from discrepancy_paper.experiments import pendulum_energy as pe
 
 
 def k_errors(pend, q, t, method):

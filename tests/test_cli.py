@@ -96,24 +96,23 @@ def test_library_spec_parser_builds_the_stated_library():
             parse_library(bad)
 
 
-def test_reproduce_all_reports_a_failing_experiment_and_runs_the_rest(tmp_path, monkeypatch,
-                                                                      capsys):
-    from discrepancy import experiments
-    from discrepancy.errors import DataError
+def test_reproduce_without_the_paper_package_says_how_to_install_it(monkeypatch, capsys):
+    import importlib.metadata
 
-    ran = []
-
-    def fine(out, *, quick=False):
-        ran.append("fine")
-        return tmp_path
-
-    def broken(out, *, quick=False):
-        raise DataError("data folder not found")
-
-    monkeypatch.setattr(experiments, "EXPERIMENTS", {"a": None, "b": None, "c": None})
-    monkeypatch.setattr(experiments, "get_experiment",
-                        lambda name: broken if name == "b" else fine)
-    assert main(["reproduce", "all", "--out", str(tmp_path)]) == 2
+    monkeypatch.setattr(importlib.metadata, "entry_points", lambda group: [])
+    assert main(["reproduce", "vdp-parameter", "--out", "x"]) == 2
     err = capsys.readouterr().err
-    assert ran == ["fine", "fine"] and "[b] FAILED: data folder not found" in err
-    assert "1 of 3 experiments failed: b" in err
+    assert "pip install -e paper" in err and err.count("\n") == 1
+
+
+def test_the_library_imports_nothing_of_the_paper_package():
+    import ast
+    from pathlib import Path
+
+    import discrepancy
+
+    for path in Path(discrepancy.__file__).parent.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            assert not any(n.startswith("discrepancy_paper") for n in names), path

@@ -193,21 +193,6 @@ def test_support_loss_terms_integrate_the_squared_dynamic_pivot_force(swings):
     assert coef["viscous joint 1"] == pytest.approx(p.k1, rel=1e-3)
 
 
-def test_friction_law_figure_shows_each_joints_own_torque():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from discrepancy.plots.energy import friction_law_figure
-
-    terms = default_friction_library()      # 2, 3: Coulomb joint 1, joint 2; 5: air drag arm 2
-    fig = friction_law_figure({"law": [(terms[2], 5e-4), (terms[3], 2e-4), (terms[5], 1e-5)]})
-    (joint1,), (joint2,) = (ax.get_lines()[:1] for ax in fig.axes[:2])
-    w1, tau1 = joint1.get_data()
-    np.testing.assert_allclose(tau1[w1 > 0], 5e-4)                     # joint 1 alone
-    w2, tau2 = joint2.get_data()
-    np.testing.assert_allclose(tau2[w2 > 0], 2e-4 + 1e-5 * w2[w2 > 0] ** 2)   # joint 2 + arm 2
-
-
 def test_bootstrap_intervals_cover_the_true_friction_and_shrink_with_less_noise(swings):
     pend, t, (x, _) = swings
     p = pend.parameters

@@ -9,9 +9,8 @@ Quick start::
                                 differentiation_method=dc.SavitzkyGolay(window_length=21))
     model.fit(x, t=0.01).print()
 """
-__version__ = "0.1.0"
-
 from . import errors, io, systems
+from ._version import __version__  # noqa: F401
 from .data.chunks import Chunk
 from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
 from .differentiation import (

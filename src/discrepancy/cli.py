@@ -88,29 +88,23 @@ def _times(text: str) -> np.ndarray:
     return start + step * np.arange(int(np.floor(count + 1e-9)))
 
 
-def cmd_reproduce(args) -> int:
-    """Run the chosen experiments; with ``all``, one that fails does not stop the others."""
-    from .errors import DiscrepancyError
-    from .experiments import EXPERIMENTS, get_experiment
+def add_plugin_commands(sub) -> set[str]:
+    """Subcommands of other installed packages (entry point group ``discrepancy.commands``:
+    a function adding parsers to argparse subparsers), e.g. the paper package's
+    ``reproduce``. Returns the names added; the library itself imports none of them."""
+    from importlib.metadata import entry_points
 
-    names = list(EXPERIMENTS) if args.name == "all" else [args.name]
-    failed = []
-    for name in names:
-        print(f"[{name}] running ...", flush=True)
-        try:
-            folder = get_experiment(name)(args.out, quick=args.quick)
-        except (DiscrepancyError, FileNotFoundError) as e:
-            if len(names) == 1:
-                raise
-            print(f"[{name}] FAILED: {e}", file=sys.stderr, flush=True)
-            failed.append(name)
-            continue
-        print(f"[{name}] wrote {folder}/report.md", flush=True)
-    if failed:
-        print(f"error: {len(failed)} of {len(names)} experiments failed: {', '.join(failed)}",
-              file=sys.stderr)
-        return 2
-    return 0
+    before = set(sub.choices)
+    for entry in entry_points(group="discrepancy.commands"):
+        entry.load()(sub)
+    return set(sub.choices) - before
+
+
+def _no_paper_package(args) -> int:
+    print("error: 'reproduce' runs the paper's examples, which are in the separate package "
+          "discrepancy-paper; from a clone of the repository: pip install -e paper",
+          file=sys.stderr)
+    return 2
 
 
 def cmd_fit(args) -> None:
@@ -183,17 +177,15 @@ def cmd_show(args) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .experiments import EXPERIMENTS
-
     p = argparse.ArgumentParser(prog="discrepancy", epilog=EPILOG,
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 description="Learn sparse discrepancy models f_m + g with SINDy.")
     sub = p.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("reproduce", help="run a paper example; writes DIR/NAME/report.md")
-    r.add_argument("name", choices=[*EXPERIMENTS, "all"])
-    r.add_argument("--out", default="out", help="output folder (default: out)")
-    r.add_argument("--quick", action="store_true", help="fewer seeds/cases (for smoke tests)")
-    r.set_defaults(func=cmd_reproduce)
+    if "reproduce" not in add_plugin_commands(sub):
+        r = sub.add_parser("reproduce", help="run a paper example (needs the discrepancy-paper "
+                           "package)")
+        r.add_argument("rest", nargs=argparse.REMAINDER)
+        r.set_defaults(func=_no_paper_package)
     f = sub.add_parser("fit", help="fit a model to a data file and save it as JSON")
     f.add_argument("--data", required=True, help="CSV (header row), NPZ, MAT or HDF5 file")
     f.add_argument("--prior", help="FILE.py:NAME (imports, i.e. runs, FILE.py) or module:NAME "

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._optional import require
 from .accumulate import BlockAccumulator
 from .data.chunks import step_of
 from .data.trajectory import Trajectory
@@ -122,6 +123,7 @@ def _trajectory_graph(setup, x, u, xd, step, trajectory, offset):
 def dask_statistics(model, x, *, t=None, u=None, x_dot=None):
     """``(setup, stats)`` of dask arrays for ``model.fit`` (``x`` one array or a list, one
     per trajectory)."""
+    require("dask.array", purpose="fitting dask arrays")
     xs = list(x) if isinstance(x, (list, tuple)) else [x]
     us = _per_trajectory("u", u, len(xs))
     xds = _per_trajectory("x_dot", x_dot, len(xs))
@@ -193,7 +195,7 @@ def fit_sources(model, sources, *, t=None):
     """Fit ``model`` on a list of :class:`~discrepancy.streaming.ChunkSource` (e.g. one
     :class:`~discrepancy.data.sources.HDF5Source` per file), one ``dask.delayed`` task
     each, summed as a tree. Returns the model."""
-    from dask import delayed
+    delayed = require("dask", purpose="fit_sources").delayed
 
     sources = list(sources)
     if not sources:

@@ -43,6 +43,10 @@ class ExportError(DiscrepancyError, ValueError):
     """A model cannot be exported to the requested form (e.g. a numpy-only term to CasADi)."""
 
 
+class MissingDependencyError(DiscrepancyError, ImportError):
+    """An optional dependency is not installed; the message says which extra installs it."""
+
+
 class ConvergenceError(DiscrepancyError, RuntimeError):
     """A solver (ODE, optimiser, IPOPT) did not reach a valid solution."""
 

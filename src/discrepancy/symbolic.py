@@ -263,7 +263,9 @@ def from_data(data, *, where: str = "expression",
 
 def to_casadi(expr: sp.Expr, variables: Mapping[str, object], *, term: str | None = None):
     """The CasADi expression of ``expr`` with symbols replaced by ``variables[name]`` (SX/MX)."""
-    import casadi as ca
+    from ._optional import require
+
+    ca = require("casadi", purpose="exporting to CasADi")
 
     def build(e):
         if e.is_Symbol:

@@ -3,7 +3,7 @@
 Every function takes CasADi dynamics ``f(x (n,1), u (r,1)) -> xdot (n,1)``, or a
 model that exports itself (``to_casadi()``), or ``(states, inputs, rhs)`` sympy equations.
 """
-from .dynamics import as_casadi, from_equations, rk4_step
+from .dynamics import as_casadi, from_equations, rk4_step  # first: checks that casadi is here
 from .replay import Run, interval_defects, replay, swing_up_errors
 from .sensitivity import parameter_sensitivity, state_transition
 from .tracking import Tracker, linearise, tvlqr

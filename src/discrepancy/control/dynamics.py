@@ -3,10 +3,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import casadi as ca
-
+from .._optional import require
 from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import to_casadi
+
+ca = require("casadi", purpose="discrepancy.control")
 
 
 def from_equations(states: Sequence, inputs: Sequence, rhs: Sequence) -> ca.Function:

@@ -118,7 +118,9 @@ def _read_variables(path: Path, kind: str) -> dict[str, np.ndarray]:
             return {k: f[k] for k in f.files}
     if kind == "mat":
         return read_mat(path)
-    import h5py
+    from .._optional import require
+
+    h5py = require("h5py", purpose="reading HDF5 files")
     out = {}
     with h5py.File(path, "r") as f:
         f.visititems(lambda name, obj: out.__setitem__(name, obj[()])

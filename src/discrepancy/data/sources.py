@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._optional import require
 from ..errors import ShapeError, UnknownNameError
 from .chunks import Chunk, ChunkSource
 
@@ -138,7 +139,7 @@ class HDF5Source(_ArrayFiles):
     _pattern = "*.h5"
 
     def _open(self, path):
-        import h5py
+        h5py = require("h5py", purpose="HDF5Source")
 
         f = h5py.File(path, "r")
 
@@ -155,7 +156,7 @@ class ZarrSource(_ArrayFiles):
     _pattern = "*.zarr"
 
     def _open(self, path):
-        import zarr
+        zarr = require("zarr", purpose="ZarrSource")
 
         g = zarr.open_group(str(path), mode="r")
         return _Opened(g, lambda: sorted(k for k, _ in g.arrays()))

@@ -59,7 +59,9 @@ def to_latex(model, precision: int = 4, part=None) -> str:
 
 def to_casadi(model, part=None):
     """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms)."""
-    import casadi as ca
+    from .._optional import require
+
+    ca = require("casadi", purpose="to_casadi")
 
     part = _part(model, part, default_hybrid=True)
     x = ca.SX.sym("x", model.n_states_)

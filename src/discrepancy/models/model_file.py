@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from .. import __version__
+from .._version import __version__
 from ..errors import DiscrepancyError, ModelFileError, ParameterError
 from ..symbolic import IDENTIFIER, from_data, to_data
 

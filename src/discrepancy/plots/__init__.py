@@ -1,4 +1,8 @@
-"""Figures (matplotlib, Agg backend). Nothing outside this package imports matplotlib."""
-import matplotlib
+"""Figures of fits and uncertainty (matplotlib, the ``[plots]`` extra).
 
-matplotlib.use("Agg")
+The backend is the caller's choice: nothing here calls ``matplotlib.use``. Nothing outside
+this package imports matplotlib.
+"""
+from .._optional import require
+
+require("matplotlib", purpose="discrepancy.plots")

@@ -3,9 +3,10 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-from discrepancy.data.pendulum_recording import load_pendulum_recording
 from discrepancy.errors import DataError, ShapeError
-from discrepancy.experiments.pendulum_energy_measured import RECORDING, data_folder
+from discrepancy_paper.datasets import data_file
+from discrepancy_paper.experiments.pendulum_energy_measured import RECORDING
+from discrepancy_paper.recording import load_pendulum_recording
 
 
 def _cells(arrays):
@@ -100,15 +101,8 @@ def test_missing_and_unreadable_files(tmp_path):
         load_pendulum_recording(tmp_path / "text.mat")
 
 
-def _real_file():
-    try:
-        return data_folder() / RECORDING
-    except DataError as e:
-        pytest.skip(f"measured double pendulum data not available: {e}")
-
-
 def test_real_recording_is_one_80_s_swing():
-    rec = load_pendulum_recording(_real_file())
+    rec = load_pendulum_recording(data_file("double_pendulum", RECORDING))
     assert rec.angles.shape == (80001, 2)
     assert rec.t[-1] == pytest.approx(80.0)
     assert rec.split_time == pytest.approx(69.342)

@@ -14,11 +14,17 @@ import numpy as np
 import sympy as sp
 from tqdm import tqdm
 
-from ..differentiation import Dequantised, SavitzkyGolay
-from ..energy import EnergyDiscrepancy, EnergyTautologyWarning, error_summary, percent_error
-from ..energy.dissipation import default_friction_library
-from ..symbolic import symbol
-from ..systems.double_pendulum import DoublePendulum, DoublePendulumParameters
+from discrepancy.differentiation import Dequantised, SavitzkyGolay
+from discrepancy.energy import (
+    EnergyDiscrepancy,
+    EnergyTautologyWarning,
+    error_summary,
+    percent_error,
+)
+from discrepancy.energy.dissipation import default_friction_library
+from discrepancy.symbolic import symbol
+from discrepancy.systems.double_pendulum import DoublePendulum, DoublePendulumParameters
+
 from .report import Report
 
 RATE = 1000.0            # Hz

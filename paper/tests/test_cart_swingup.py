@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from discrepancy.experiments import get_experiment
+from discrepancy_paper.experiments import get_experiment
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ..symbolic import compile_numpy
+from discrepancy.symbolic import compile_numpy
 
 
 def energy_figure(t, e0, h_m, delta_h, *, split: float | None = None, title: str = ""):
@@ -130,7 +130,7 @@ def forecast_figure(origins, errors, validation, *, bar: float | None = None, ti
         ax.plot(origins, err, "o-", color=color, lw=1, ms=4, label=name)
         ax.plot([t_val], [val[name]], "*", color=color, ms=11)
     if bar is not None:
-        ax.axhline(bar, color="k", ls=":", lw=1, label=f"{bar:g} % (issue's bar)")
+        ax.axhline(bar, color="k", ls=":", lw=1, label=f"{bar:g} % (target)")
     ax.axvline(t_val, color="0.5", ls="--", lw=1)
     ax.set_yscale("log")
     ax.set_xlabel("forecast origin (s): fit on [0, origin], forecast the next window")

@@ -17,7 +17,7 @@ EXPERIMENTS = {
 
 def get_experiment(name: str):
     """The ``run`` function of experiment ``name``."""
-    from ..errors import UnknownNameError
+    from discrepancy.errors import UnknownNameError
 
     if name not in EXPERIMENTS:
         raise UnknownNameError(f"experiment {name!r} is not known; valid names: "

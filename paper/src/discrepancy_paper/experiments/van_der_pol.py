@@ -12,10 +12,11 @@ import time
 import numpy as np
 import sympy as sp
 
-from .. import STLSQ, CustomLibrary, DiscrepancyModel, PolynomialLibrary, SavitzkyGolay
-from ..symbolic import symbol
-from ..systems.integrators import rk4
-from ..systems.van_der_pol import VanDerPol
+from discrepancy import STLSQ, CustomLibrary, DiscrepancyModel, PolynomialLibrary, SavitzkyGolay
+from discrepancy.symbolic import symbol
+from discrepancy.systems.integrators import rk4
+from discrepancy.systems.van_der_pol import VanDerPol
+
 from .report import Report
 
 DT, DURATION, NOISE = 0.01, 25.0, 0.01
@@ -69,7 +70,7 @@ def _fit_seeds(case, library_factory, x_true, t, seeds):
 
 
 def _run(case, out_dir, *, quick):
-    from ..plots.trajectories import (
+    from discrepancy.plots.trajectories import (
         coefficient_spread_figure,
         discrepancy_figure,
         validation_figure,
@@ -144,7 +145,7 @@ def _run(case, out_dir, *, quick):
 
 def _uncertainty(rep, model, noisy, truth):
     """Block-bootstrap uncertainty of the seed-0 fit (polynomial library)."""
-    from ..plots.uncertainty import uncertainty_figure
+    from discrepancy.plots.uncertainty import uncertainty_figure
 
     unc = model.bootstrap(noisy, t=DT)
     low, high = unc.interval()
@@ -172,7 +173,7 @@ def _noise_study(rep, case, x_true, t, *, quick):
     levels, seeds = (0.01, 0.05, 0.1), range(2 if quick else 10)
     rows, out = [], {}
     for noise in levels:
-        for label, threshold in (("paper threshold 0.05", 0.05), ("auto (BIC)", "auto")):
+        for label, threshold in (("paper threshold 0.05", 0.05), ("auto", "auto")):
             right, errors = 0, []
             for seed in seeds:
                 noisy = x_true + noise * np.random.default_rng(500 + seed).standard_normal(
@@ -191,8 +192,8 @@ def _noise_study(rep, case, x_true, t, *, quick):
     rep.results["noise_study_polynomial_degree_4"] = out
     rep.text("### Beyond the paper: more noise, no hand tuning\n\nPolynomial library to "
              "degree 4, same Savitzky–Golay settings. `threshold=\"auto\"` chooses the STLSQ "
-             "threshold per equation by BIC over the whole threshold path, computed from the "
-             "Gram statistics alone.")
+             "threshold per equation by cross-validation over contiguous blocks of samples "
+             "along the whole threshold path, computed from per-fold Gram statistics alone.")
     rep.table(["noise σ", "threshold", "support right", "max coef. error %"], rows)
 
 
@@ -203,5 +204,5 @@ def _terms(model):
 
 
 def _trajectory(x, t):
-    from ..data.trajectory import Trajectory
+    from discrepancy.data.trajectory import Trajectory
     return Trajectory(t, x)

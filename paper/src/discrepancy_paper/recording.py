@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DataError, ShapeError
+from discrepancy.errors import DataError, ShapeError
 
 # Plausibility limits for a pendulum recorded in radians.
 MAX_ABS_ANGLE = 20 * np.pi      # ten full turns from upright; degrees (~180 at rest) exceed it
@@ -76,7 +76,7 @@ def load_pendulum_recording(path, *, segments=("Y_id", "Y_vad"), times=("Time_id
         ShapeError: a segment that is not ``4 x N`` or whose time cell has another length.
         DataError: the file is missing or not a readable MATLAB file.
     """
-    from .io import read_mat
+    from discrepancy.data.io import read_mat
 
     where = str(path)
     contents = read_mat(path, what="recording")

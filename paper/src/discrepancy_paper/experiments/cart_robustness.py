@@ -1,4 +1,4 @@
-"""Robustness of swing-up strategies to perturbed true systems (issue 4, item 6).
+"""Robustness of swing-up strategies to perturbed true systems.
 
 Each case draws the link parameters (all of Table 1 except g) independently within
 ±2 % and the initial angles within ±0.02 rad of hanging; every strategy (a plan and
@@ -10,8 +10,8 @@ import casadi as ca
 import numpy as np
 from tqdm import tqdm
 
-from ..control import from_equations, replay, swing_up_errors
-from ..systems.double_pendulum_on_cart import CartPendulumParameters, DoublePendulumOnCart
+from discrepancy.control import from_equations, replay, swing_up_errors
+from discrepancy.systems.double_pendulum_on_cart import CartPendulumParameters, DoublePendulumOnCart
 
 PERTURBED = ("m1", "m2", "a1", "a2", "I1", "I2", "l1", "l2", "k1", "k2")
 PARAMETER_SPREAD, ANGLE_SPREAD = 0.02, 0.02

@@ -10,7 +10,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from .. import (
+from discrepancy import (
     STLSQ,
     DiscrepancyModel,
     FiniteDifference,
@@ -18,10 +18,11 @@ from .. import (
     PolynomialLibrary,
     SavitzkyGolay,
 )
-from ..control import as_casadi, plan_trajectory, replay, swing_up_errors, tvlqr
-from ..control.replay import interval_defects
-from ..control.sensitivity import parameter_sensitivity, state_transition
-from ..systems.double_pendulum_on_cart import STATE_NAMES, DoublePendulumOnCart
+from discrepancy.control import as_casadi, plan_trajectory, replay, swing_up_errors, tvlqr
+from discrepancy.control.replay import interval_defects
+from discrepancy.control.sensitivity import parameter_sensitivity, state_transition
+from discrepancy.systems.double_pendulum_on_cart import STATE_NAMES, DoublePendulumOnCart
+
 from .cart_report import write_report, write_robustness
 from .cart_robustness import robustness_study
 from .report import Report
