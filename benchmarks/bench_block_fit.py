@@ -14,7 +14,6 @@ import numpy as np
 from _common import machine, table
 from scipy.optimize import nnls
 
-import discrepancy as dc
 from discrepancy.energy import dissipation
 from discrepancy.systems.double_pendulum import DoublePendulum
 from discrepancy_paper.experiments import pendulum_energy as pe
@@ -47,7 +46,7 @@ def fit_with(function):
 
 
 def errors(pend, q, t, block_seconds):
-    model = dc.EnergyDiscrepancy(pend.energy, block_seconds=block_seconds,
+    model = pe.dissipation_model(pend, block_seconds=block_seconds,
                                  differentiation_method=pe._differentiator(dequantise=False))
     model.fit(q, t)
     k1, k2 = pe._viscous(model)

@@ -12,13 +12,12 @@ import sys
 import numpy as np
 from _common import machine, table
 
-import discrepancy as dc
 from discrepancy.systems.double_pendulum import DoublePendulum
 from discrepancy_paper.experiments import pendulum_energy as pe
 
 
 def k_errors(pend, q, t, method):
-    model = dc.EnergyDiscrepancy(pend.energy, differentiation_method=method).fit(q, t)
+    model = pe.dissipation_model(pend, differentiation_method=method).fit(q, t)
     k1, k2 = pe._viscous(model)
     p = pend.parameters
     return 100 * abs(k1 / p.k1 - 1), 100 * abs(k2 / p.k2 - 1)

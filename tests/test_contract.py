@@ -58,6 +58,16 @@ def _model_fit(model):
     return model.fit(X, t=T, x_dot=X_DOT)
 
 
+def oscillator_energy(x):
+    """Energy of x'' = -x for x = [q, dq] (the damped oscillator above loses it)."""
+    return 0.5 * (x[:, 0] ** 2 + x[:, 1] ** 2)
+
+
+def _energy_case(make):
+    return Case(make, lambda m: m.fit(X[:, :1], T, dq=X_DOT[:, :1]), lambda m: m.coef_,
+                lambda m: m.predict(X[:, :1], T, dq=X_DOT[:, :1]))
+
+
 CASES = {
     "PolynomialLibrary": _library_case(lambda: dc.PolynomialLibrary(degree=3)),
     "FourierLibrary": _library_case(lambda: dc.FourierLibrary(n_frequencies=2)),
@@ -81,6 +91,11 @@ CASES = {
     "AutoSmoothing": _differentiator_case(dc.AutoSmoothing),
     "Dequantised": _differentiator_case(
         lambda: dc.Dequantised(resolution=0.01), x=np.round(X / 0.01) * 0.01),
+    "DissipationDiscrepancy": _energy_case(
+        lambda: dc.DissipationDiscrepancy(oscillator_energy, max_terms=2)),
+    "EnergyDiscrepancy": _energy_case(
+        lambda: dc.EnergyDiscrepancy(oscillator_energy, feature_library=dc.PolynomialLibrary(2),
+                                     optimizer=dc.STLSQ(threshold=1e-3))),
     "DiscrepancyModel": Case(
         lambda: dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(3),
                                     optimizer=dc.STLSQ(threshold=0.05)),

@@ -149,6 +149,6 @@ def test_swing_up_plan_is_accurate_on_its_own_model():
     assert interval_defects(f, plan).max() < 1e-6
     own = replay(f, x0, plan.t, plan.u)  # CVODES
     assert np.max(np.abs(own.final - plan.x[-1])) < 0.02
-    assert swing_up_errors(own.final)["success"]
+    assert swing_up_errors(own.final, angles=(0, 1), rates=(3, 4))["success"]
     scipy_run = replay(system.rhs, x0, plan.t, plan.u)  # DOP853 on the numpy form
     np.testing.assert_allclose(scipy_run.final, own.final, atol=1e-4)

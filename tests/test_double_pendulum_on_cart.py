@@ -94,7 +94,7 @@ def test_power_balance_at_random_states():
     ax2 = (u[:, 0] + P.l1 * (np.cos(p1) * dd1 - np.sin(p1) * d1 ** 2)
            + P.a2 * (np.cos(p2) * dd2 - np.sin(p2) * d2 ** 2))
     power_in = (P.m1 * ax1 + P.m2 * ax2) * ds
-    expected = -system.dissipation(x) + power_in
+    expected = -system.dissipated_power(x) + power_in
     np.testing.assert_allclose(dH, expected, rtol=1e-6, atol=1e-6)
     assert np.max(np.abs(expected)) > 1.0
 

@@ -1,4 +1,5 @@
-"""EnergyDiscrepancy: dissipation form recovers known friction laws; paper's form is a tautology."""
+"""Energy discrepancy: the dissipation form recovers known friction laws; the paper's state
+form is a tautology."""
 import warnings
 
 import numpy as np
@@ -7,6 +8,7 @@ import sympy as sp
 
 import discrepancy as dc
 from discrepancy.energy import (
+    DissipationDiscrepancy,
     EnergyDiscrepancy,
     EnergyTautologyWarning,
     default_friction_library,
@@ -16,9 +18,27 @@ from discrepancy.energy import (
     percent_error,
     support_loss_terms,
 )
-from discrepancy.errors import NotFittedError, ParameterError, ShapeError, UnknownNameError
+from discrepancy.errors import NotFittedError, ParameterError, ShapeError
 from discrepancy.symbolic import symbol
 from discrepancy.systems import DoublePendulum, DoublePendulumParameters
+
+SPEEDS = ["dphi1", "dphi2"]
+
+
+def pendulum_terms(**kwargs):
+    """The default laws for the double pendulum's joints (the elbow turns at dphi1 - dphi2)."""
+    return default_friction_library(SPEEDS, joints=DoublePendulum().joints(), **kwargs)
+
+
+def dissipation(pend, **kwargs):
+    kwargs.setdefault("friction_terms", pendulum_terms())
+    return DissipationDiscrepancy(pend.energy, position_names=["phi1", "phi2"], **kwargs)
+
+
+def state_form(pend, library):
+    return EnergyDiscrepancy(pend.energy, feature_library=library,
+                             position_names=["phi1", "phi2"],
+                             optimizer=dc.STLSQ(threshold=1e-5, alpha=0.0))
 
 
 @pytest.fixture(scope="module")
@@ -38,10 +58,10 @@ def test_percent_error_by_hand():
 
 
 def test_integrated_powers_of_constant_speeds():
-    terms = default_friction_library()
+    terms = pendulum_terms()
     t = np.linspace(0, 2, 201)
     v = np.tile([3.0, 1.0], (201, 1))     # joint 1 at 3 rad/s, joint 2 at 2 rad/s
-    integral = integrated_powers(terms, v, t)[-1]
+    integral = integrated_powers(terms, v, t, SPEEDS)[-1]
     expected = [9 * 2, 4 * 2, 3 * 2, 2 * 2, 27 * 2, 1 * 2,
                 3 * np.exp(-900) * 2, 2 * np.exp(-400) * 2]
     np.testing.assert_allclose(integral, expected, rtol=1e-12, atol=1e-300)
@@ -57,8 +77,8 @@ def known_loss():
     t = np.arange(30001) / 1000
     decay = np.exp(-t / 15)
     v = np.column_stack([5 * decay * np.sin(4.1 * t), 7 * decay * np.sin(6.3 * t + 1)])
-    terms = default_friction_library()
-    features = integrated_powers(terms, v, t)
+    terms = pendulum_terms()
+    features = integrated_powers(terms, v, t, SPEEDS)
     index = {term.name: i for i, term in enumerate(terms)}
     return terms, features, sum(c * features[:, index[n]] for n, c in TWO_LAWS.items())
 
@@ -90,18 +110,25 @@ def test_block_fit_survives_pointwise_noise_of_the_energy(known_loss):
 
 
 def test_learned_dissipation_is_never_negative():
-    """Energy that grows (pumping) cannot be explained by passive friction: all xi >= 0."""
+    """A loss whose best unconstrained fit needs a negative Coulomb coefficient (energy fed
+    in at joint 1): the law keeps only dissipating terms, with positive coefficients, and
+    the energy it says is lost never decreases."""
     t = np.arange(5001) / 1000
     v = np.column_stack([np.sin(3 * t), np.cos(2 * t)])
-    terms = default_friction_library()
-    features = integrated_powers(terms, v, t)
-    fit = fit_dissipation(features, -1e-3 * features[:, 0] - 5e-4 * features[:, 2], terms)
-    assert np.all(fit.coefficients >= 0)
+    terms = pendulum_terms()
+    features = integrated_powers(terms, v, t, SPEEDS)
+    free = np.linalg.lstsq(np.c_[np.ones(len(t)), features[:, [0, 2]]],
+                           8e-4 * features[:, 0] - 2e-4 * features[:, 2], rcond=None)[0]
+    assert free[2] < 0                      # least squares would pump energy in
+    fit = fit_dissipation(features, 8e-4 * features[:, 0] - 2e-4 * features[:, 2], terms)
+    assert len(fit.terms) >= 1 and np.all(fit.coefficients > 0)
+    law = features[:, [terms.index(term) for term in fit.terms]] @ fit.coefficients
+    assert np.all(np.diff(law) >= -1e-15)
 
 
 def test_energy_discrepancy_recovers_k1_k2_from_exact_states(swings):
     pend, t, (x, _) = swings
-    model = EnergyDiscrepancy(pend.energy).fit(x[:, :2], t, dq=x[:, 2:])
+    model = dissipation(pend).fit(x[:, :2], t, dq=x[:, 2:])
     found = {term.name: c for term, c in zip(model.terms_, model.coef_, strict=True)}
     p = DoublePendulumParameters()
     assert set(found) == {"viscous joint 1", "viscous joint 2"}
@@ -123,8 +150,7 @@ def test_state_form_spanning_library_is_a_tautology(swings):
     """Spanning H_m: exact on training, wrong by E0 - E0' on a swing from another energy."""
     pend, t, (x, x_other) = swings
     _, spans = _libraries()
-    model = EnergyDiscrepancy(pend.energy, form="state", feature_library=spans,
-                              optimizer=dc.STLSQ(threshold=1e-5, alpha=0.0))
+    model = state_form(pend, spans)
     with pytest.warns(EnergyTautologyWarning, match="spans the model energy"):
         model.fit(x[:, :2], t, dq=x[:, 2:])
     assert model.span_residual_ < 1e-8
@@ -141,8 +167,7 @@ def test_state_form_without_span_does_not_warn(swings):
     paper, _ = _libraries()
     theta = paper.fit(["phi1", "phi2", "dphi1", "dphi2"]).transform(x)
     assert energy_span_residual(theta, pend.energy(x)) > 1e-3
-    model = EnergyDiscrepancy(pend.energy, form="state", feature_library=paper,
-                              optimizer=dc.STLSQ(threshold=1e-5, alpha=0.0))
+    model = state_form(pend, paper)
     with warnings.catch_warnings():
         warnings.simplefilter("error", EnergyTautologyWarning)
         model.fit(x[:, :2], t, dq=x[:, 2:])
@@ -151,43 +176,51 @@ def test_state_form_without_span_does_not_warn(swings):
 def test_bad_use_raises_clear_errors(swings):
     pend, t, (x, _) = swings
     with pytest.raises(NotFittedError):
-        EnergyDiscrepancy(pend.energy).predict(x[:, :2], t, dq=x[:, 2:])
-    with pytest.raises(UnknownNameError, match="form"):
-        EnergyDiscrepancy(pend.energy, form="hamilton").fit(x[:, :2], t, dq=x[:, 2:])
+        dissipation(pend).predict(x[:, :2], t, dq=x[:, 2:])
     with pytest.raises(ParameterError, match="feature_library"):
-        EnergyDiscrepancy(pend.energy, form="state").fit(x[:, :2], t, dq=x[:, 2:])
+        EnergyDiscrepancy(pend.energy).fit(x[:, :2], t, dq=x[:, 2:])
     with pytest.raises(ShapeError, match="energy"):
-        EnergyDiscrepancy(lambda z: np.zeros(3)).fit(x[:, :2], t, dq=x[:, 2:])
-    with pytest.raises(ShapeError, match="q"):
-        EnergyDiscrepancy(pend.energy).fit(x[:, :3], t)
+        dissipation(pend).set_params(energy=lambda z: np.zeros(3)).fit(x[:, :2], t,
+                                                                      dq=x[:, 2:])
+    with pytest.raises(ShapeError, match="position_names"):
+        dissipation(pend).fit(x[:, :3], t)
     with pytest.raises(ParameterError, match="max_terms"):
-        EnergyDiscrepancy(pend.energy, max_terms=20).fit(x[:, :2], t, dq=x[:, 2:])
+        dissipation(pend, max_terms=0).fit(x[:, :2], t, dq=x[:, 2:])
+    with pytest.raises(ParameterError, match="energy"):
+        DissipationDiscrepancy("H").fit(x[:, :2], t, dq=x[:, 2:])
+
+
+def test_max_terms_larger_than_the_library_is_clipped(swings):
+    pend, t, (x, _) = swings
+    two = pendulum_terms()[:2]
+    model = dissipation(pend, friction_terms=two, max_terms=20).fit(x[:, :2], t, dq=x[:, 2:])
+    assert [term.name for term in model.terms_] == ["viscous joint 1", "viscous joint 2"]
 
 
 def test_smoothed_coulomb_power():
-    terms = default_friction_library(coulomb_smoothing=0.5)
+    terms = pendulum_terms(coulomb_smoothing=0.5)
     coulomb = [t for t in terms if t.name == "Coulomb joint 1"][0]
     t = np.linspace(0, 1, 101)
     v = np.tile([2.0, 2.0], (101, 1))
-    value = integrated_powers([coulomb], v, t)[-1, 0]
+    value = integrated_powers([coulomb], v, t, SPEEDS)[-1, 0]
     assert value == pytest.approx(2.0 * np.tanh(4.0), rel=1e-12)
     with pytest.raises(ParameterError, match="coulomb_smoothing"):
-        default_friction_library(coulomb_smoothing=0.0)
+        pendulum_terms(coulomb_smoothing=0.0)
 
 
 def test_support_loss_terms_integrate_the_squared_dynamic_pivot_force(swings):
     pend, t, (x, _) = swings
     p = pend.parameters
     weight = (p.m1 + p.m2) * p.g
-    terms = support_loss_terms(pend.pivot_force, static_vertical=weight)
+    terms = support_loss_terms(pend.pivot_force, pend.state_names, static_vertical=weight)
     names = ["phi1", "phi2", "dphi1", "dphi2"]
     got = integrated_powers(terms, x, t, names)[-1]
     force = pend.pivot_force(x)
     expected = [np.trapezoid(force[:, 0] ** 2, t), np.trapezoid((force[:, 1] - weight) ** 2, t)]
     np.testing.assert_allclose(got, expected, rtol=1e-12)
     # a fit with these terms in the library still finds the true joint friction
-    model = EnergyDiscrepancy(pend.energy, friction_terms=(*default_friction_library()[:4],
-                                                           *terms)).fit(x[:, :2], t, dq=x[:, 2:])
+    model = dissipation(pend, friction_terms=(*pendulum_terms()[:4], *terms)).fit(
+        x[:, :2], t, dq=x[:, 2:])
     coef = {term.name: c for term, c in zip(model.terms_, model.coef_, strict=True)}
     assert set(coef) == {"viscous joint 1", "viscous joint 2"}
     assert coef["viscous joint 1"] == pytest.approx(p.k1, rel=1e-3)
@@ -200,8 +233,8 @@ def test_bootstrap_intervals_cover_the_true_friction_and_shrink_with_less_noise(
     widths = []
     for noise in (3e-4, 3e-5):
         q = x[:, :2] + rng.normal(0, noise, x[:, :2].shape)
-        model = EnergyDiscrepancy(pend.energy, max_terms=2,
-                                  differentiation_method=dc.SavitzkyGolay(51, 3)).fit(q, t)
+        model = dissipation(pend, max_terms=2,
+                            differentiation_method=dc.SavitzkyGolay(51, 3)).fit(q, t)
         assert [term.name for term in model.terms_] == ["viscous joint 1", "viscous joint 2"]
         unc = model.bootstrap(q, t, n_resamples=100, seed=1)
         low, high = unc.interval()
@@ -212,7 +245,7 @@ def test_bootstrap_intervals_cover_the_true_friction_and_shrink_with_less_noise(
 
 def test_bootstrap_refuses_what_it_cannot_do(swings):
     pend, t, (x, _) = swings
-    model = EnergyDiscrepancy(pend.energy)
+    model = dissipation(pend)
     with pytest.raises(NotFittedError):
         model.bootstrap(x[:, :2], t, dq=x[:, 2:])
     model.fit(x[:, :2], t, dq=x[:, 2:])
@@ -235,8 +268,8 @@ def test_forecast_band_holds_the_true_energy_loss_and_narrows_with_less_noise(sw
     widths = []
     for noise in (3e-4, 3e-5):
         q, q_new = (s[:, :2] + rng.normal(0, noise, s[:, :2].shape) for s in (x, x_new))
-        model = EnergyDiscrepancy(pend.energy, max_terms=2,
-                                  differentiation_method=dc.SavitzkyGolay(51, 3)).fit(q, t)
+        model = dissipation(pend, max_terms=2,
+                            differentiation_method=dc.SavitzkyGolay(51, 3)).fit(q, t)
         unc = model.bootstrap(q, t, n_resamples=100, seed=1)
         edge = 25
         exact_new = pend.energy(x_new[:1])[0] - pend.energy(x_new[edge:-edge])
@@ -252,9 +285,9 @@ def test_forecast_band_holds_the_true_energy_loss_and_narrows_with_less_noise(sw
 
 def test_forecast_band_refuses_a_foreign_uncertainty_and_a_bad_level(swings):
     pend, t, (x, x_new) = swings
-    model = EnergyDiscrepancy(pend.energy, max_terms=2).fit(x[:, :2], t, dq=x[:, 2:])
+    model = dissipation(pend, max_terms=2).fit(x[:, :2], t, dq=x[:, 2:])
     unc = model.bootstrap(x[:, :2], t, dq=x[:, 2:], n_resamples=10)
-    other = EnergyDiscrepancy(pend.energy, max_terms=1).fit(x[:, :2], t, dq=x[:, 2:])
+    other = dissipation(pend, max_terms=1).fit(x[:, :2], t, dq=x[:, 2:])
     with pytest.raises(ParameterError, match="this model's bootstrap"):
         other.predict_interval(x_new[:, :2], t, unc, dq=x_new[:, 2:])
     with pytest.raises(ParameterError, match="level"):

@@ -2,12 +2,14 @@
 import numpy as np
 
 from discrepancy.energy import default_friction_library
+from discrepancy.systems import DoublePendulum
 
 
 def test_friction_law_figure_shows_each_joints_own_torque():
     from discrepancy_paper.plots.energy import friction_law_figure
 
-    terms = default_friction_library()      # 2, 3: Coulomb joint 1, joint 2; 5: air drag arm 2
+    # 2, 3: Coulomb joint 1, joint 2; 5: air drag of arm 2 (dphi2)
+    terms = default_friction_library(["dphi1", "dphi2"], joints=DoublePendulum().joints())
     fig = friction_law_figure({"law": [(terms[2], 5e-4), (terms[3], 2e-4), (terms[5], 1e-5)]})
     (joint1,), (joint2,) = (ax.get_lines()[:1] for ax in fig.axes[:2])
     w1, tau1 = joint1.get_data()

@@ -24,16 +24,15 @@ from .differentiation import (
     TrendFiltered,
     WeakForm,
 )
-from .energy import EnergyDiscrepancy
+from .energy import DissipationDiscrepancy, EnergyDiscrepancy
 from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
 from .models import Constraints, DiscrepancyModel, load_model
 from .optimizers import STLSQ, GramStatistics, Lasso
 
 __all__ = [
-    "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "HDF5Source", "NPZFiles", "ZarrSource",
-    "CustomLibrary", "Dequantised", "DiscrepancyModel", "EnergyDiscrepancy", "FiniteDifference",
-    "FourierLibrary", "GramStatistics",
-    "Kalman", "Lasso", "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spline",
-    "TrendFiltered", "WeakForm",
-    "errors", "io", "load_model", "systems",
+    "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "CustomLibrary", "Dequantised",
+    "DiscrepancyModel", "DissipationDiscrepancy", "EnergyDiscrepancy", "FiniteDifference",
+    "FourierLibrary", "GramStatistics", "HDF5Source", "Kalman", "Lasso", "NPZFiles",
+    "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spline", "TrendFiltered",
+    "WeakForm", "ZarrSource", "errors", "io", "load_model", "systems",
 ]

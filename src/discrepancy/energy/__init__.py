@@ -8,12 +8,14 @@ from .dissipation import (
     select_terms,
     support_loss_terms,
 )
+from .dissipation_model import DissipationDiscrepancy
 from .hamiltonian import EnergyTautologyWarning, check_span, energy_span_residual
 from .metrics import error_summary, percent_error
-from .model import EnergyDiscrepancy
+from .state_form import EnergyDiscrepancy
 from .uncertainty import DissipationUncertainty
 
-__all__ = ["DissipationFit", "DissipationUncertainty", "EnergyDiscrepancy",
-           "EnergyTautologyWarning", "FrictionTerm", "check_span", "default_friction_library",
-           "energy_span_residual", "error_summary", "fit_dissipation", "integrated_powers",
-           "percent_error", "select_terms", "support_loss_terms"]
+__all__ = ["DissipationDiscrepancy", "DissipationFit", "DissipationUncertainty",
+           "EnergyDiscrepancy", "EnergyTautologyWarning", "FrictionTerm", "check_span",
+           "default_friction_library", "energy_span_residual", "error_summary",
+           "fit_dissipation", "integrated_powers", "percent_error", "select_terms",
+           "support_loss_terms"]

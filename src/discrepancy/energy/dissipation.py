@@ -44,26 +44,37 @@ class FrictionTerm:
     functions: Mapping[str, Callable] | None = field(default=None, compare=False)
 
 
-def default_friction_library(velocity_names=("dphi1", "dphi2"), *, stribeck_speed: float = 0.1,
+def default_friction_library(velocity_names, *, joints=None, stribeck_speed: float = 0.1,
                              coulomb_smoothing: float | None = None) -> tuple[FrictionTerm, ...]:
-    """Friction laws a tribologist would try for the two joints of a double pendulum.
+    """Friction laws a tribologist would try, for any number of coordinates.
 
-    Joint 1 turns at ``w1 = dphi1``, joint 2 at ``w2 = dphi1 - dphi2``. Per joint: viscous
-    ``k w`` (power ``k w^2``), Coulomb ``F sign(w)`` (power ``F |w|``; with
-    ``coulomb_smoothing = eps`` (rad/s) ``F tanh(w/eps)``, power ``F w tanh(w/eps)``), and a
-    Stribeck excess ``F_s exp(-(w/v_s)^2) sign(w)``; per arm: quadratic air drag
-    ``c dphi |dphi|`` (power ``c |dphi|^3``).
+    Args:
+        velocity_names: the velocity variables (e.g. ``["dq1", "dq2"]``).
+        joints: ``{label: relative speed}``: what each joint turns at, as sympy expressions
+            of the velocity symbols or velocity names (default: each coordinate is its own
+            joint, ``{"joint i": dq_i}``). A double pendulum with absolute angles has
+            ``{"joint 1": dphi1, "joint 2": dphi1 - dphi2}``.
+        stribeck_speed: ``v_s`` (rad/s) of the Stribeck excess.
+        coulomb_smoothing: ``eps`` (rad/s): Coulomb friction as ``F tanh(w / eps)``.
+
+    Per joint at speed ``w``: viscous ``k w`` (power ``k w^2``), Coulomb ``F sign(w)``
+    (power ``F |w|``, or ``F w tanh(w/eps)`` smoothed) and a Stribeck excess
+    ``F_s exp(-(w/v_s)^2) sign(w)``; per coordinate, quadratic air drag ``c dq |dq|``
+    (power ``c |dq|^3``).
     """
-    if stribeck_speed <= 0:
-        raise ParameterError(f"stribeck_speed must be > 0 rad/s; got {stribeck_speed}")
-    if coulomb_smoothing is not None and coulomb_smoothing <= 0:
+    if not isinstance(stribeck_speed, (int, float)) or not stribeck_speed > 0:
+        raise ParameterError(f"stribeck_speed must be > 0 rad/s; got {stribeck_speed!r}")
+    if coulomb_smoothing is not None and not (isinstance(coulomb_smoothing, (int, float))
+                                              and coulomb_smoothing > 0):
         raise ParameterError("coulomb_smoothing must be > 0 rad/s or None; "
-                             f"got {coulomb_smoothing}")
-    d1, d2 = (symbol(n) for n in velocity_names)
-    joints = {"joint 1": d1, "joint 2": d1 - d2}
-    terms = []
-    for label, w in joints.items():
-        terms.append(FrictionTerm(f"viscous {label}", w ** 2, "N m s", f"k ({w})"))
+                             f"got {coulomb_smoothing!r}")
+    if isinstance(velocity_names, str) or not velocity_names:
+        raise ParameterError(f"velocity_names must be a non-empty list of names; got "
+                             f"{velocity_names!r}")
+    speeds = [symbol(n) for n in velocity_names]
+    joints = _joints(joints, speeds)
+    terms = [FrictionTerm(f"viscous {label}", w ** 2, "N m s", f"k ({w})")
+             for label, w in joints.items()]
     for label, w in joints.items():
         if coulomb_smoothing is None:
             power, law = sp.Abs(w), f"F sign({w})"
@@ -71,8 +82,8 @@ def default_friction_library(velocity_names=("dphi1", "dphi2"), *, stribeck_spee
             eps = sp.Float(coulomb_smoothing)
             power, law = w * sp.tanh(w / eps), f"F tanh(({w})/{coulomb_smoothing:g})"
         terms.append(FrictionTerm(f"Coulomb {label}", power, "N m", law))
-    for label, d in (("arm 1", d1), ("arm 2", d2)):
-        terms.append(FrictionTerm(f"air drag {label}", sp.Abs(d) ** 3, "N m s^2",
+    for d in speeds:
+        terms.append(FrictionTerm(f"air drag {d.name}", sp.Abs(d) ** 3, "N m s^2",
                                   f"c {d} |{d}|"))
     vs = sp.Float(stribeck_speed)
     for label, w in joints.items():
@@ -81,8 +92,26 @@ def default_friction_library(velocity_names=("dphi1", "dphi2"), *, stribeck_spee
     return tuple(terms)
 
 
-def support_loss_terms(pivot_force: Callable, state_names=("phi1", "phi2", "dphi1", "dphi2"),
-                       *, static_vertical: float = 0.0) -> tuple[FrictionTerm, ...]:
+def _joints(joints, speeds) -> dict[str, sp.Expr]:
+    if joints is None:
+        return {f"joint {i + 1}": d for i, d in enumerate(speeds)}
+    if not isinstance(joints, Mapping) or not joints:
+        raise ParameterError(f"joints must be a mapping of labels to relative speeds; got "
+                             f"{joints!r:.80}")
+    names = {d.name for d in speeds}
+    out = {}
+    for label, w in joints.items():
+        expr = symbol(w) if isinstance(w, str) and w in names else w
+        if not isinstance(expr, sp.Expr) or not expr.free_symbols or \
+                not {s.name for s in expr.free_symbols} <= names:
+            raise ParameterError(f"joints[{label!r}] must be a velocity name or a sympy "
+                                 f"expression of {sorted(names)}; got {w!r:.60}")
+        out[str(label)] = expr.xreplace({s: symbol(s.name) for s in expr.free_symbols})
+    return out
+
+
+def support_loss_terms(pivot_force: Callable, state_names, *,
+                       static_vertical: float = 0.0) -> tuple[FrictionTerm, ...]:
     """Energy absorbed by a rig's mount: ``c Fx^2`` and ``c (Fy - W)^2``.
 
     ``pivot_force(x)`` ``(m, n)`` -> ``(m, 2)`` is the force (N) between pivot and pendulum,
@@ -106,8 +135,7 @@ def support_loss_terms(pivot_force: Callable, state_names=("phi1", "phi2", "dphi
     return tuple(terms)
 
 
-def integrated_powers(terms, values: np.ndarray, t: np.ndarray,
-                      names=("dphi1", "dphi2")) -> np.ndarray:
+def integrated_powers(terms, values: np.ndarray, t: np.ndarray, names) -> np.ndarray:
     """``int_0^t theta_j dt`` (trapezoid) for every term: ``(m, p)`` (J per unit coefficient).
 
     ``values`` ``(m, len(names))`` holds the variables the terms' powers use (the joint
@@ -183,8 +211,9 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     ``support`` is empty when no law fits with positive coefficients (no dissipation seen).
     """
     m, p = features.shape
-    if not 1 <= max_terms <= p:
-        raise ParameterError(f"max_terms must be in [1, {p}] (number of terms); got {max_terms}")
+    if not isinstance(max_terms, (int, np.integer)) or max_terms < 1:
+        raise ParameterError(f"max_terms must be an integer >= 1; got {max_terms!r}")
+    max_terms = min(int(max_terms), p)
     if not 0 <= holdout < 0.9:
         raise ParameterError(f"holdout must be a fraction in [0, 0.9); got {holdout}")
     cut = int(round(m * (1 - holdout)))
@@ -236,6 +265,11 @@ def fit_dissipation(features: np.ndarray, delta_h: np.ndarray, terms,
     support, candidates = select_terms(features, delta_h, **selection)
     if support:
         coef = nonnegative_fit(features[:, support], delta_h, selection.get("block"))
+        kept = [k for k in range(len(support)) if coef[1 + k] > 0]  # refitted to 0: dropped
+        if len(kept) < len(support):
+            support = tuple(support[k] for k in kept)
+            coef = nonnegative_fit(features[:, support], delta_h, selection.get("block")) \
+                if support else np.array([np.mean(delta_h)])
     else:
         coef = np.array([np.mean(delta_h)])
     named = [(s, [terms[i].name for i in sub]) for s, sub in candidates]

@@ -10,7 +10,7 @@ from ..errors import ParameterError
 
 # The paper's Table 1 (SI units): the double pendulum of Sections IV.B and IV.C. One source
 # for the defaults of both pendulum parameter classes, whose fields differ.
-PAPER_TABLE_1 = {"m1": 0.2704, "m2": 0.2056, "a1": 0.1910, "a2": 0.1621, "L1": 0.2667,
+PAPER_TABLE_1 = {"m1": 0.2704, "m2": 0.2056, "a1": 0.1910, "a2": 0.1621, "l1": 0.2667,
                  "I1": 0.003, "I2": 0.0011, "k1": 7.24e-4, "k2": 1.65e-4, "g": 9.818}
 
 

@@ -3,7 +3,7 @@
 State ``x = [phi1, phi2, dphi1, dphi2]`` (rad, rad/s); both angles are absolute and
 measured from the upright, so ``phi = pi`` hangs down. The energy is the paper's
 eqs. (29)-(35): centres of mass at ``x1 = a1 sin phi1``, ``y1 = a1 cos phi1``,
-``x2 = L1 sin phi1 + a2 sin phi2``, ``y2 = L1 cos phi1 + a2 cos phi2``,
+``x2 = l1 sin phi1 + a2 sin phi2``, ``y2 = l1 cos phi1 + a2 cos phi2``,
 ``T = m1 v1^2/2 + m2 v2^2/2 + (I1 dphi1^2 + I2 dphi2^2)/2`` and ``V = g (m1 y1 + m2 y2)``.
 Joint friction enters through the Rayleigh function
 ``D = k1 dphi1^2 / 2 + k2 (dphi1 - dphi2)^2 / 2``; the equations of motion are derived
@@ -16,15 +16,14 @@ from functools import cache
 
 import numpy as np
 import sympy as sp
-from scipy.integrate import solve_ivp
 
-from ..errors import ConvergenceError, DataError, ParameterError, ShapeError
+from ..errors import DataError, ParameterError, ShapeError
 from ..symbolic import compile_numpy, symbol
 from .base import PAPER_TABLE_1, System, check_physical_parameters
 from .mechanics import lagrange_equations
 
 STATE_NAMES = ("phi1", "phi2", "dphi1", "dphi2")
-PARAMETER_ORDER = ("m1", "m2", "a1", "a2", "L1", "I1", "I2", "k1", "k2", "g")
+PARAMETER_ORDER = ("m1", "m2", "a1", "a2", "l1", "I1", "I2", "k1", "k2", "g")
 
 
 @dataclass(frozen=True)
@@ -33,7 +32,7 @@ class DoublePendulumParameters:
 
     Attributes:
         m1, m2: arm masses (kg). a1, a2: pivot-to-centre-of-mass distances (m).
-        L1: length of the first arm, pivot to pivot (m). I1, I2: inertias about the
+        l1: length of the first arm, pivot to pivot (m). I1, I2: inertias about the
         centres of mass (kg m^2). k1, k2: viscous friction of joint 1 and joint 2
         (N m s / rad). g: gravity (m/s^2).
     """
@@ -42,7 +41,7 @@ class DoublePendulumParameters:
     m2: float = PAPER_TABLE_1["m2"]
     a1: float = PAPER_TABLE_1["a1"]
     a2: float = PAPER_TABLE_1["a2"]
-    L1: float = PAPER_TABLE_1["L1"]
+    l1: float = PAPER_TABLE_1["l1"]
     I1: float = PAPER_TABLE_1["I1"]
     I2: float = PAPER_TABLE_1["I2"]
     k1: float = PAPER_TABLE_1["k1"]
@@ -54,7 +53,7 @@ class DoublePendulumParameters:
 
     @classmethod
     def from_array(cls, values) -> DoublePendulumParameters:
-        """From ``[m1 m2 a1 a2 L1 I1 I2 k1 k2 g]`` (the MultiArm-Pendulum file's order)."""
+        """From ``[m1 m2 a1 a2 l1 I1 I2 k1 k2 g]`` (the MultiArm-Pendulum file's order)."""
         arr = np.asarray(values, dtype=float).ravel()
         if arr.shape != (len(PARAMETER_ORDER),):
             raise ShapeError(f"parameter array must hold {len(PARAMETER_ORDER)} values "
@@ -63,7 +62,7 @@ class DoublePendulumParameters:
 
     @classmethod
     def from_mat(cls, path, *, variable: str = "EstimatedParameters") -> DoublePendulumParameters:
-        """From a MATLAB file holding ``variable`` = ``[m1 m2 a1 a2 L1 I1 I2 k1 k2 g]``,
+        """From a MATLAB file holding ``variable`` = ``[m1 m2 a1 a2 l1 I1 I2 k1 k2 g]``,
         e.g. ``EstimatedParameters_DoublePendulum.mat`` of the MultiArm-Pendulum rig."""
         from ..data.io import read_mat
 
@@ -79,9 +78,9 @@ class DoublePendulumParameters:
 
 def _centres(q):
     """``[(mass, x, y)]`` of the two centres of mass (``y`` up) for angle functions ``q``."""
-    m1, m2, a1, a2, L1 = (symbol(n) for n in PARAMETER_ORDER[:5])
+    m1, m2, a1, a2, l1 = (symbol(n) for n in PARAMETER_ORDER[:5])
     return [(m1, a1 * sp.sin(q[0]), a1 * sp.cos(q[0])),
-            (m2, L1 * sp.sin(q[0]) + a2 * sp.sin(q[1]), L1 * sp.cos(q[0]) + a2 * sp.cos(q[1]))]
+            (m2, l1 * sp.sin(q[0]) + a2 * sp.sin(q[1]), l1 * sp.cos(q[0]) + a2 * sp.cos(q[1]))]
 
 
 @cache
@@ -241,16 +240,21 @@ class DoublePendulum(System):
     def simulate(self, x0, t, *, rtol: float = 1e-10, atol: float = 1e-10) -> np.ndarray:
         """Integrate from ``x0`` ``(4,)`` and return the states at times ``t`` ``(m,)``, ``(m, 4)``.
 
-        Uses scipy's DOP853 with tight tolerances (the energy tests rely on them).
+        Uses :func:`discrepancy.models.simulation.integrate` with scipy's DOP853 and tight
+        tolerances (the energy tests rely on them).
         """
-        x0 = self._state(x0)
-        if x0.shape[0] != 1:
-            raise ShapeError(f"x0 must be one state of 4 values; got shape {np.shape(x0)}")
-        t = np.asarray(t, dtype=float)
-        if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0):
-            raise DataError("t must be a strictly increasing 1-D array of at least 2 times")
-        sol = solve_ivp(lambda _, y: self.rhs(y[None, :])[0], (t[0], t[-1]), x0[0],
-                        method="DOP853", t_eval=t, rtol=rtol, atol=atol)
-        if not sol.success:
-            raise ConvergenceError(f"double pendulum integration failed: {sol.message}")
-        return sol.y.T
+        from ..models.simulation import integrate
+
+        return integrate(lambda x, u: self.rhs(x), x0, t, n_states=4, n_inputs=0,
+                         method="DOP853", rtol=rtol, atol=atol)
+
+    @property
+    def position_names(self) -> tuple[str, ...]:
+        return STATE_NAMES[:2]
+
+    def joints(self) -> dict:
+        """``{label: relative speed}`` of the two joints (sympy), for
+        :func:`~discrepancy.energy.default_friction_library`: the angles are absolute, so
+        the elbow turns at ``dphi1 - dphi2``."""
+        d1, d2 = symbol("dphi1"), symbol("dphi2")
+        return {"joint 1": d1, "joint 2": d1 - d2}

@@ -44,8 +44,8 @@ class CartPendulumParameters:
     a2: float = PAPER_TABLE_1["a2"]
     I1: float = PAPER_TABLE_1["I1"]
     I2: float = PAPER_TABLE_1["I2"]
-    l1: float = PAPER_TABLE_1["L1"]
-    l2: float = PAPER_TABLE_1["L1"]    # Table 1 lists 0.2667 m for both arms
+    l1: float = PAPER_TABLE_1["l1"]
+    l2: float = PAPER_TABLE_1["l1"]    # Table 1 lists 0.2667 m for both arms
     k1: float = PAPER_TABLE_1["k1"]
     k2: float = PAPER_TABLE_1["k2"]
     g: float = PAPER_TABLE_1["g"]
@@ -109,12 +109,16 @@ class DoublePendulumOnCart(System):
 
     # -- symbolic -----------------------------------------------------------------------------
     def _values(self):
-        params = self.params if self.params is not None else CartPendulumParameters()
-        if not isinstance(params, CartPendulumParameters):
-            raise ParameterError("params must be a CartPendulumParameters; got "
-                                 f"{describe(params)}")
         par = _derived()[0]
-        return {par[k]: sp.Float(v, 17) for k, v in asdict(params).items()}
+        return {par[k]: sp.Float(v, 17) for k, v in asdict(self.parameters).items()}
+
+    @property
+    def parameters(self) -> CartPendulumParameters:
+        """The parameters in use: ``params``, or the paper's Table 1."""
+        p = self.params if self.params is not None else CartPendulumParameters()
+        if not isinstance(p, CartPendulumParameters):
+            raise ParameterError(f"params must be a CartPendulumParameters; got {describe(p)}")
+        return p
 
     def _matrices(self):
         _, mass, rest, energy = _derived()
@@ -200,16 +204,16 @@ class DoublePendulumOnCart(System):
         x, _, z = self._stack(x, None)
         return self._numeric()[1](z)
 
-    def dissipation(self, x):
+    def dissipated_power(self, x):
         """Power lost in the joints ``k1 dphi1^2 + k2 (dphi1 - dphi2)^2`` (W), ``(m,)``."""
         x, _, _ = self._stack(x, None)
-        p = self.params if self.params is not None else CartPendulumParameters()
+        p = self.parameters
         return p.k1 * x[:, 3] ** 2 + p.k2 * (x[:, 3] - x[:, 4]) ** 2
 
     def points(self, x):
         """Cart, elbow and tip positions ``(m, 3, 2)`` (m) for drawing."""
         x, _, _ = self._stack(x, None)
-        p = self.params if self.params is not None else CartPendulumParameters()
+        p = self.parameters
         cart = np.column_stack([x[:, 2], np.zeros(len(x))])
         elbow = cart + p.l1 * np.column_stack([np.sin(x[:, 0]), np.cos(x[:, 0])])
         tip = elbow + p.l2 * np.column_stack([np.sin(x[:, 1]), np.cos(x[:, 1])])

@@ -18,13 +18,13 @@ from discrepancy import (
     PolynomialLibrary,
     SavitzkyGolay,
 )
-from discrepancy.control import as_casadi, plan_trajectory, replay, swing_up_errors, tvlqr
+from discrepancy.control import as_casadi, plan_trajectory, replay, tvlqr
 from discrepancy.control.replay import interval_defects
 from discrepancy.control.sensitivity import parameter_sensitivity, state_transition
 from discrepancy.systems.double_pendulum_on_cart import STATE_NAMES, DoublePendulumOnCart
 
 from .cart_report import write_report, write_robustness
-from .cart_robustness import robustness_study
+from .cart_robustness import robustness_study, swing_errors
 from .report import Report
 
 NAME = "cart-swingup"
@@ -110,7 +110,7 @@ def identification_summary(model) -> dict:
 
 def outcome(run) -> dict:
     """Final errors at T, success, and whether the cart stayed on the rail."""
-    out = swing_up_errors(run.final)
+    out = swing_errors(run.final)
     travel = float(np.max(np.abs(run.x_dense[..., 2])))
     # the planner bounds s at the grid points only; allow 1 mm between them
     out.update(max_cart_travel_m=travel, within_rail=bool(travel <= RAIL + 1e-3),

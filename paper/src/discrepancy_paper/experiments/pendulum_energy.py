@@ -16,6 +16,7 @@ from tqdm import tqdm
 
 from discrepancy.differentiation import Dequantised, SavitzkyGolay
 from discrepancy.energy import (
+    DissipationDiscrepancy,
     EnergyDiscrepancy,
     EnergyTautologyWarning,
     error_summary,
@@ -80,7 +81,7 @@ def _state_form(energy, q_train, t_train, validations, smoothing=None):
 
     out = {}
     for name, library in state_libraries().items():
-        model = EnergyDiscrepancy(energy, form="state", feature_library=library,
+        model = EnergyDiscrepancy(energy, feature_library=library, position_names=PHI,
                                   optimizer=dc.STLSQ(threshold=1e-4, alpha=1e-8),
                                   differentiation_method=SavitzkyGolay(**(smoothing or SMOOTHING)))
         with warnings.catch_warnings(record=True) as caught:
@@ -125,7 +126,7 @@ def _band_coverage(model, uncertainty, x, kept_t, x_exact, t) -> float:
     """Fraction of a new swing's true energy loss (``H_m`` of the exact states ``x_exact`` at
     times ``t``, from the first sample the model keeps) inside the model's 95 % bootstrap band
     along the estimated states ``x`` at ``kept_t``."""
-    low, high = model.predict_interval_states(x, kept_t, uncertainty)
+    low, high = model.predict_interval(x[:, :2], kept_t, uncertainty, dq=x[:, 2:])
     h = model.energy(x_exact[np.searchsorted(t, kept_t)])
     exact = h[0] - h
     return float(np.mean((low <= exact) & (exact <= high)))
@@ -144,15 +145,16 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
     rows, per_seed, first = [], [], None
     for seed in tqdm(seeds, desc="pendulum-energy seeds", disable=None):
         (x0, q, _), (x0_val, q_val, x_val) = _synthetic_seed(pend, seed, t)
-        model = EnergyDiscrepancy(pend.energy, differentiation_method=_differentiator()).fit(q, t)
+        model = dissipation_model(pend, differentiation_method=_differentiator()).fit(q, t)
         k1, k2 = _viscous(model)
-        k1_raw, k2_raw = _viscous(EnergyDiscrepancy(
-            pend.energy, differentiation_method=_differentiator(dequantise=False)).fit(q, t))
+        k1_raw, k2_raw = _viscous(dissipation_model(
+            pend, differentiation_method=_differentiator(dequantise=False)).fit(q, t))
         uncertainty = model.bootstrap(q, t, seed=seed)
         k1_interval, k2_interval = _viscous_intervals(uncertainty)
         train = model.score(q, t, start=model.offset_)
         xv, tv = model.states(q_val, t)
-        val = error_summary(model.measured_delta_h(xv), model.predict_states(xv, tv))
+        val = error_summary(model.measured_delta_h(xv),
+                            model.predict(xv[:, :2], tv, dq=xv[:, 2:]))
         entry = {"seed": seed, "initial_state_training": x0, "initial_state_validation": x0_val,
                  "identified_terms": model.identified_terms(), "equation": model.equation(),
                  "k1": k1, "k2": k2, "k1_relative_error_percent": abs(k1 / params.k1 - 1) * 100,
@@ -240,7 +242,7 @@ def _quantisation_control(rep, pend, params, per_seed, t):
     with the same smoothing is the encoder's share of the error."""
     worst = max(per_seed, key=lambda e: e["k1_relative_error_percent"])
     exact = pend.simulate(worst["initial_state_training"], t)[:, :2]
-    k1, k2 = _viscous(EnergyDiscrepancy(pend.energy, differentiation_method=_differentiator(
+    k1, k2 = _viscous(dissipation_model(pend, differentiation_method=_differentiator(
         dequantise=False)).fit(exact, t))
     control = {"seed": worst["seed"], "k1_relative_error_percent_exact_angles":
                abs(k1 / params.k1 - 1) * 100, "k2_relative_error_percent_exact_angles":
@@ -263,8 +265,24 @@ def _quantisation_control(rep, pend, params, per_seed, t):
 
 
 def _file_law(params):
-    terms = default_friction_library()
+    terms = friction_library(DoublePendulum())
     return [(terms[0], params.k1), (terms[1], params.k2)]
+
+
+#: the double pendulum's coordinates (absolute angles, the elbow turns at dphi1 - dphi2)
+PHI = DoublePendulum().position_names
+
+
+def friction_library(pend: DoublePendulum, **kwargs):
+    """The default friction laws for the pendulum's joints (``joints()`` of the system)."""
+    return default_friction_library([f"d{n}" for n in pend.position_names],
+                                    joints=pend.joints(), **kwargs)
+
+
+def dissipation_model(pend: DoublePendulum, **kwargs) -> DissipationDiscrepancy:
+    """A dissipation-form model of ``pend`` with its names and friction laws (unless given)."""
+    kwargs.setdefault("friction_terms", friction_library(pend))
+    return DissipationDiscrepancy(pend.energy, position_names=pend.position_names, **kwargs)
 
 
 def _synthetic_figures(rep, pend, model, q, q_val, t, energy_figure, fit_figure):
@@ -276,7 +294,7 @@ def _synthetic_figures(rep, pend, model, q, q_val, t, energy_figure, fit_figure)
     for label, qq, start in (("training", q, model.offset_), ("validation", q_val, 0.0)):
         xx, tt = model.states(qq, t)
         dh = model.measured_delta_h(xx)
-        pred = model.predict_states(xx, tt, start=start)
+        pred = model.predict(xx[:, :2], tt, dq=xx[:, 2:], start=start)
         panels.append({"t": tt, "delta_h": dh, "model": pred, "label": label,
                        "error": percent_error(dh, pred), "error_label": "error (% of max|dH|)"})
     rep.figure(fit_figure(panels, title=model.equation()), "fit.png",

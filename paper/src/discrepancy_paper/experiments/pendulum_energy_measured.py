@@ -12,9 +12,8 @@ from scipy.ndimage import uniform_filter1d
 from tqdm import tqdm
 
 from discrepancy.differentiation import SavitzkyGolay
-from discrepancy.energy import EnergyDiscrepancy, error_summary, percent_error
+from discrepancy.energy import error_summary, percent_error
 from discrepancy.energy.dissipation import (
-    default_friction_library,
     integrated_powers,
     support_loss_terms,
 )
@@ -22,7 +21,13 @@ from discrepancy.energy.uncertainty import quantile_band
 from discrepancy.systems.double_pendulum import DoublePendulum, DoublePendulumParameters
 
 from ..datasets import data_file
-from .pendulum_energy import _file_law, _state_form, _state_form_text
+from .pendulum_energy import (
+    _file_law,
+    _state_form,
+    _state_form_text,
+    dissipation_model,
+    friction_library,
+)
 from .report import Report
 
 RECORDING = "DoublePendulumDataForParameterEstimation.mat"
@@ -48,17 +53,20 @@ def measured_library(pend: DoublePendulum):
     and the loss in the rig's mount under the pivot force. The default library's Stribeck
     terms are left out: a free decay never sticks, and their integrated power counts the
     turning points (it grows as the swing decays), so they act as a drift, not as a law."""
-    joints_and_air = [term for term in default_friction_library()
+    joints_and_air = [term for term in friction_library(pend)
                       if not term.name.startswith("Stribeck")]
     p = pend.parameters
-    support = support_loss_terms(pend.pivot_force, static_vertical=(p.m1 + p.m2) * p.g)
+    support = support_loss_terms(pend.pivot_force, pend.state_names,
+                                 static_vertical=(p.m1 + p.m2) * p.g)
     return (*joints_and_air, *support)
 
 
 def procedures(pend: DoublePendulum) -> dict[str, dict]:
     """The fitting procedures compared: library x fit (cumulative / 2 s blocks) x selection
-    (elbow on the training error / forecast of the last 20 %); ``EnergyDiscrepancy`` kwargs."""
-    libraries = {"default library": None, "rig library (with mount loss)": measured_library(pend)}
+    (elbow on the training error / forecast of the last 20 %); ``DissipationDiscrepancy``
+    keyword arguments."""
+    libraries = {"default library": friction_library(pend),
+                 "rig library (with mount loss)": measured_library(pend)}
     fits = {"cumulative": None, "2 s blocks": 2.0}
     selections = {"elbow": 0.0, "hold-out 20 %": 0.2}
     return {f"{lib}, {fit}, {sel}": {"friction_terms": terms, "block_seconds": block,
@@ -71,7 +79,7 @@ def _continued(model, x, t, split):
     """Errors of the model integrated from t0 through the recording (training fit continued),
     on training and validation; and restarted at the measured dH where validation begins."""
     dh = model.measured_delta_h(x)
-    pred = model.predict_states(x, t, start=model.offset_)
+    pred = model.predict(x[:, :2], t, dq=x[:, 2:], start=model.offset_)
     anchored = pred[split:] - pred[split] + dh[split]
     return dh, pred, {"training": error_summary(dh[:split], pred[:split]),
                       "validation_continued": error_summary(dh[split:], pred[split:]),
@@ -84,7 +92,8 @@ def _forecast_band(model, uncertainty, x, t, split, level=0.95):
     every resampled law (in % of the window's dH range), and the fraction of the window in
     which the band holds the measured dH averaged over 1 s. (The band is the model's; the
     measured dH also wobbles within each swing with H_m's error, which the mean removes.)"""
-    curves = model.resampled_predictions_states(x, t, uncertainty, continued=True)[:, split:]
+    curves = model.resampled_predictions(x[:, :2], t, uncertainty, dq=x[:, 2:],
+                                         continued=True)[:, split:]
     low, high = quantile_band(curves, level)
     dh = model.measured_delta_h(x)[split:]
     mean = uniform_filter1d(dh, max(1, int(round(1.0 / np.median(np.diff(t))))), mode="nearest")
@@ -102,7 +111,7 @@ def _forecast_band(model, uncertainty, x, t, split, level=0.95):
 
 def _file_law_model(pend, x, t, split):
     """The rig file's viscous law k1 dphi1^2 + k2 (dphi1 - dphi2)^2 with a fitted offset."""
-    dh = EnergyDiscrepancy(pend.energy).measured_delta_h(x)
+    dh = dissipation_model(pend).measured_delta_h(x)
     power = pend.dissipated_power(x)
     pred = cumulative_trapezoid(power, t, initial=0.0)
     pred += np.mean(dh[:split] - pred[:split])
@@ -128,7 +137,7 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
     pend = DoublePendulum(params)
     rep = Report(out_dir, "pendulum-energy-experiment", title="Energy lost to friction: measured "
                  "double pendulum (MultiArm-Pendulum rig, cart locked)")
-    x, t = EnergyDiscrepancy(differentiation_method=_smoother()).states(rec.angles, rec.t)
+    x, t = dissipation_model(pend, differentiation_method=_smoother()).states(rec.angles, rec.t)
     split = int(np.searchsorted(t, rec.split_time))
     horizon = rec.t[-1] - rec.split_time
     last = rec.split_time - horizon
@@ -176,7 +185,7 @@ def _smoother(smoothing=None):
 def _fit(pend, kwargs, rec, end_time, smoothing=None):
     """A dissipation-form model fitted on the raw angles of ``[0, end_time)``."""
     end = int(np.searchsorted(rec.t, end_time))
-    return EnergyDiscrepancy(pend.energy, differentiation_method=_smoother(smoothing),
+    return dissipation_model(pend, differentiation_method=_smoother(smoothing),
                              **kwargs).fit(rec.angles[:end], rec.t[:end])
 
 
@@ -191,7 +200,7 @@ def _smoothing_sensitivity(pend, kwargs, rec) -> list[dict]:
     """The chosen procedure refitted after the other Savitzky-Golay windows: law and errors."""
     rows = []
     for smoothing in OTHER_SMOOTHINGS:
-        x, t = EnergyDiscrepancy(differentiation_method=_smoother(smoothing)).states(
+        x, t = dissipation_model(pend, differentiation_method=_smoother(smoothing)).states(
             rec.angles, rec.t)
         model = _fit(pend, kwargs, rec, rec.split_time, smoothing)
         errors = _continued(model, x, t, int(np.searchsorted(t, rec.split_time)))[2]
@@ -202,7 +211,7 @@ def _smoothing_sensitivity(pend, kwargs, rec) -> list[dict]:
 def _forecast_error(model, x, t, start, stop):
     """Max |dH - model| over ``[start, stop)`` (training fit continued), % of its dH range."""
     dh = model.measured_delta_h(x[:stop])
-    pred = model.predict_states(x[:stop], t[:stop], start=model.offset_)
+    pred = model.predict(x[:stop, :2], t[:stop], dq=x[:stop, 2:], start=model.offset_)
     return error_summary(dh[start:], pred[start:])["max_abs_percent_of_range"]
 
 
@@ -230,8 +239,7 @@ def _compare_procedures(pend, rec, x, t, split, origins):
 
 def _energy_lost_per_term(model, x, t) -> dict[str, float]:
     """Energy (J) each learned term dissipates along states ``x`` at times ``t``."""
-    names = [*model.position_names, *model.velocity_names]
-    lost = integrated_powers(model.terms_, x, t, names)[-1] * model.coef_
+    lost = integrated_powers(model.terms_, x, t, model.variable_names_)[-1] * model.coef_
     return dict(zip((term.name for term in model.terms_), lost.tolist(), strict=True))
 
 
@@ -399,8 +407,9 @@ def _rates_section(rep, models, x, t, split):
                      key=lambda n: table[n]["forecast_median_percent_of_range"])
     other = models[joint_only]
     dh = model.measured_delta_h(x)
-    curves = {"measured": dh, "chosen": model.predict_states(x, t),
-              f"best default-library procedure ({joint_only})": other.predict_states(x, t)}
+    curves = {"measured": dh, "chosen": model.predict(x[:, :2], t, dq=x[:, 2:]),
+              f"best default-library procedure ({joint_only})": other.predict(
+                  x[:, :2], t, dq=x[:, 2:])}
     centres, rates = _block_rates(t, curves)
     measured = rates.pop("measured")
     rep.results["dissipated_power_per_4_s_block_W"] = {

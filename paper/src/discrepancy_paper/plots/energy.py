@@ -69,13 +69,13 @@ def friction_law_figure(laws, *, speed_max: float = 10.0, title: str = ""):
     w = np.linspace(-speed_max, speed_max, 801)
     w = w[w != 0]
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.6))
-    for j, (ax, name) in enumerate(zip(axes, ("joint 1 and arm 1 (dphi1 = w, dphi2 = 0)",
-                                              "joint 2 and arm 2 (dphi1 = 0, dphi2 = -w)"),
+    for j, (ax, name) in enumerate(zip(axes, ("joint 1 and arm 1 drag (dphi1 = w, dphi2 = 0)",
+                                              "joint 2 and arm 2 drag (dphi1 = 0, dphi2 = -w)"),
                                        strict=True)):
         v = np.zeros((len(w), 2))
         v[:, 0] = w if j == 0 else 0.0
         v[:, 1] = 0.0 if j == 0 else -w   # joint 2 turns at dphi1 - dphi2 = w
-        other = ("joint 2", "arm 2") if j == 0 else ("joint 1", "arm 1")
+        other = ("joint 2", "dphi2") if j == 0 else ("joint 1", "dphi1")
         shown = []
         for label, terms in laws.items():
             # each panel shows its own joint's and arm's laws (terms named after neither: both)

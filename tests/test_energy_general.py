@@ -1,0 +1,89 @@
+"""The dissipation model on mechanical systems other than the paper's: a single pendulum and a
+three-link pendulum in joint angles, each simulated with known joint friction. Their
+equations of motion come from sympy.physics.mechanics (LagrangesMethod), not from this
+package; the fits use the defaults only."""
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import solve_ivp
+from sympy.physics import mechanics as me
+
+import discrepancy as dc
+
+G = 9.81
+
+
+def chain(masses, lengths, frictions, coulomb=None):
+    """A planar chain of point masses on massless rods, joint angles ``q`` (``q_i`` relative
+    to link ``i - 1``; the first from hanging down), viscous joint friction ``k_i`` (and
+    Coulomb ``F_i sign(dq_i)``, smoothed over 1e-3 rad/s). Returns ``(rhs(x), energy(x))``."""
+    n = len(masses)
+    q = me.dynamicsymbols(f"q1:{n + 1}")
+    dq = me.dynamicsymbols(f"q1:{n + 1}", 1)
+    frame = me.ReferenceFrame("N")
+    origin = me.Point("O")
+    origin.set_vel(frame, 0)
+    angle, point, particles, potential = 0, origin, [], 0
+    for i in range(n):
+        angle = angle + q[i]
+        nxt = point.locatenew(f"P{i}", lengths[i] * (sp.sin(angle) * frame.x
+                                                     - sp.cos(angle) * frame.y))
+        nxt.v2pt_theory(point, frame, frame.orientnew(f"L{i}", "Axis", (angle, frame.z)))
+        particles.append(me.Particle(f"m{i}", nxt, masses[i]))
+        potential += masses[i] * G * nxt.pos_from(origin).dot(frame.y)
+        point = nxt
+    kinetic = sum(p.kinetic_energy(frame) for p in particles)
+    lagrangian = kinetic - potential
+    torques = [-frictions[i] * dq[i] - (coulomb[i] * sp.tanh(dq[i] / 1e-3) if coulomb else 0)
+               for i in range(n)]
+    method = me.LagrangesMethod(lagrangian, q, frame=frame)
+    method.form_lagranges_equations()
+    mass, forcing = method.mass_matrix, method.forcing + sp.Matrix(torques)
+    qs, vs = sp.symbols(f"a1:{n + 1}"), sp.symbols(f"w1:{n + 1}")
+    to_plain = {**dict(zip(dq, vs, strict=True)), **dict(zip(q, qs, strict=True))}
+    mass_f = sp.lambdify([qs, vs], mass.subs(to_plain))
+    forcing_f = sp.lambdify([qs, vs], forcing.subs(to_plain))
+    energy_f = sp.lambdify([qs, vs], (kinetic + potential).subs(to_plain))
+
+    def rhs(_, x):
+        acc = np.linalg.solve(np.array(mass_f(x[:n], x[n:]), float),
+                              np.array(forcing_f(x[:n], x[n:]), float).ravel())
+        return np.r_[x[n:], acc]
+
+    def energy(x):
+        return np.array([energy_f(row[:n], row[n:]) for row in x], float)
+
+    return rhs, energy
+
+
+def swing(rhs, x0, seconds, rate=1000):
+    t = np.arange(int(seconds * rate) + 1) / rate
+    sol = solve_ivp(rhs, (0, t[-1]), x0, t_eval=t, method="DOP853", rtol=1e-11, atol=1e-11)
+    assert sol.success
+    return t, sol.y.T
+
+
+def laws(model):
+    return {term.name: c for term, c in zip(model.terms_, model.coef_, strict=True)}
+
+
+def test_single_pendulum_viscous_and_coulomb_friction():
+    rhs, energy = chain([0.5], [0.4], [2e-3], coulomb=[4e-3])
+    t, x = swing(rhs, [2.6, 0.0], 20)
+    model = dc.DissipationDiscrepancy(energy).fit(x[:, :1], t)
+    found = laws(model)
+    assert set(found) == {"viscous joint 1", "Coulomb joint 1"}
+    assert found["viscous joint 1"] == pytest.approx(2e-3, rel=0.02)
+    assert found["Coulomb joint 1"] == pytest.approx(4e-3, rel=0.02)
+
+
+def test_three_link_pendulum_in_joint_angles():
+    k = [3e-3, 1.5e-3, 8e-4]
+    rhs, energy = chain([0.3, 0.2, 0.1], [0.3, 0.25, 0.2], k)
+    t, x = swing(rhs, [1.2, -0.8, 1.5, 0, 0, 0], 12)
+    model = dc.DissipationDiscrepancy(energy).fit(x[:, :3], t)
+    found = laws(model)
+    assert set(found) == {"viscous joint 1", "viscous joint 2", "viscous joint 3"}
+    for i, value in enumerate(k):
+        assert found[f"viscous joint {i + 1}"] == pytest.approx(value, rel=0.02)
+    assert model.variable_names_ == ["q1", "q2", "q3", "dq1", "dq2", "dq3"]
