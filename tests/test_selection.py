@@ -123,3 +123,20 @@ def test_exact_prior_on_noise_free_data_learns_nothing(vdp_data, helpers):
     model = dc.DiscrepancyModel(prior=helpers.vdp_rhs(0.5),
                                 feature_library=dc.PolynomialLibrary(3)).fit(vdp_data.x, t=0.01)
     assert not model.coef_.any()
+
+
+def test_selection_figure_draws_the_path_and_marks_the_choice(vdp_data, helpers):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from discrepancy.plots.selection import selection_figure
+
+    x = vdp_data.x + 0.05 * np.random.default_rng(1).standard_normal(vdp_data.x.shape)
+    model = dc.DiscrepancyModel(prior=helpers.vdp_rhs(0.1),
+                                feature_library=dc.PolynomialLibrary(3)).fit(x, t=0.01)
+    fig = selection_figure(model)
+    ax = fig.axes[1]
+    chosen = [line for line in ax.get_lines() if line.get_label().startswith("chosen")][0]
+    assert chosen.get_xdata()[0] == 2 == np.count_nonzero(model.coef_[1])
+    path = model.optimizer_.selection_[1]
+    assert list(ax.get_lines()[0].get_xdata()) == path["n_terms"]
