@@ -224,18 +224,18 @@ def main(argv=None) -> int:
     """Run the command line; returns the exit code (0 success, 1 failure, 2 bad arguments)."""
     from .errors import DiscrepancyError, ParameterError
 
-    parser = build_parser()
-    parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
-    args = parser.parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    debug = "--debug" in argv  # anywhere on the line, for every subcommand
+    args = build_parser().parse_args([a for a in argv if a != "--debug"])
     try:
         return args.func(args) or 0
     except (DiscrepancyError, OSError) as e:
-        if args.debug:
+        if debug:
             raise
         print(f"error: {_one_line(e)}", file=sys.stderr)
         return 2 if isinstance(e, ParameterError) else 1
     except Exception as e:  # a bug, or an error raised by the user's --prior code
-        if args.debug:
+        if debug:
             raise
         print(f"error: {type(e).__name__}: {_one_line(e)} (rerun with --debug for the "
               "traceback)", file=sys.stderr)

@@ -12,6 +12,7 @@ EXPERIMENTS = {
     "pendulum-energy": ("pendulum_energy", "run_synthetic"),
     "pendulum-energy-experiment": ("pendulum_energy", "run_experiment"),
     "cart-swingup": ("cart_swingup", "run"),
+    "noise-study": ("noise_study", "run"),
 }
 
 
