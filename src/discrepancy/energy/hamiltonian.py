@@ -42,6 +42,6 @@ def check_span(theta: np.ndarray, energy: np.ndarray, *, tolerance: float = SPAN
             f"{residual:.2e} < {tolerance:g}), so dH = E0 - H_m is fitted exactly by "
             "E0 - H_m itself: near-zero training error means nothing, no friction is learned, "
             "and the model is off by the difference of initial energies on any other trajectory. "
-            "Use form='dissipation' or a library without H_m's terms.",
+            "Use DissipationDiscrepancy (friction laws) or a library without H_m's terms.",
             EnergyTautologyWarning, stacklevel=3)
     return residual
