@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import ShapeError
 from .dynamics import as_casadi, rk4_step
-from .trajectory import PAPER_Q, PAPER_R, Plan
+from .trajectory import Plan
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,7 @@ def linearise(model, plan: Plan):
     return A, B
 
 
-def tvlqr(model, plan: Plan, *, Q=PAPER_Q, R=PAPER_R, Q_final=None,
+def tvlqr(model, plan: Plan, *, Q=None, R=1.0, Q_final=None,
           u_bounds=None) -> Tracker:
     """Finite-horizon discrete LQR along ``plan`` on ``model`` (the planning model).
 
@@ -69,13 +69,13 @@ def tvlqr(model, plan: Plan, *, Q=PAPER_Q, R=PAPER_R, Q_final=None,
         model: the model the plan was made on (anything :func:`as_casadi` accepts).
         plan: the :class:`~.trajectory.Plan` to track.
         Q, R: stage weights on state / input deviations (diagonal entries or matrices);
-            the paper's swing-up weights by default.
+            default identity and 1 (the paper's swing-up weights are ``PAPER_Q``, ``PAPER_R``).
         Q_final: terminal weight; ``100 Q`` by default, to arrive close to the plan's end.
         u_bounds: optional ``(r, 2)`` input saturation applied by the tracker.
     """
     A, B = linearise(model, plan)
     n, r = A.shape[1], B.shape[2]
-    Qm, Rm = _diag("Q", Q, n), _diag("R", R, r)
+    Qm, Rm = _diag("Q", np.ones(n) if Q is None else Q, n), _diag("R", R, r)
     P = 100.0 * Qm if Q_final is None else _diag("Q_final", Q_final, n)
     gains = np.zeros((len(A), r, n))
     for k in range(len(A) - 1, -1, -1):

@@ -82,7 +82,7 @@ def default_guess(x0, xf, t, r):
 
 
 def plan_trajectory(model, *, x0, xf, T=2.7, n_intervals=135, substeps=4, cost="tracking",
-                    Q=PAPER_Q, R=PAPER_R, x_ref=None, x_bounds=None, u_bounds=None,
+                    Q=None, R=1.0, x_ref=None, x_bounds=None, u_bounds=None,
                     initial_guess=None, verbose=None, max_iter=1000, tol=1e-9) -> Plan:
     """Plan inputs taking ``model`` from ``x0`` to ``xf`` in time ``T``.
 
@@ -93,7 +93,8 @@ def plan_trajectory(model, *, x0, xf, T=2.7, n_intervals=135, substeps=4, cost="
         T: horizon (s); n_intervals: hold intervals; substeps: RK4 steps per interval.
         cost: ``"tracking"``: ``∫ (x - x_ref)ᵀ Q (x - x_ref) + R u² dt`` (the paper's, with
             ``x_ref = xf`` by default); ``"effort"``: ``∫ uᵀu dt``.
-        Q: state weights ``(n,)`` (diagonal); R: input weight (scalar).
+        Q: state weights ``(n,)`` (diagonal; default all 1); R: input weight (scalar).
+            The paper's swing-up weights are ``PAPER_Q``, ``PAPER_R``.
         x_bounds: ``(n, 2)`` state bounds (``±inf`` for none); u_bounds: ``(r, 2)``.
         initial_guess: a :class:`Plan` (e.g. the plan of a nearby model) or ``None`` for a
             cosine blend from x0 to xf with zero input.
@@ -113,7 +114,7 @@ def plan_trajectory(model, *, x0, xf, T=2.7, n_intervals=135, substeps=4, cost="
                              f"n_intervals={n_intervals!r}")
     x0, xf = _as_vector("x0", x0, n), _as_vector("xf", xf, n)
     x_ref = xf if x_ref is None else _as_vector("x_ref", x_ref, n)
-    q = _as_vector("Q", Q, n)
+    q = _as_vector("Q", np.ones(n) if Q is None else Q, n)
     xl, xu = _bounds("x_bounds", x_bounds, n)
     ul, uu = _bounds("u_bounds", u_bounds, r)
     t = np.linspace(0.0, T, n_intervals + 1)

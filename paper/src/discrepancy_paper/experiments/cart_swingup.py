@@ -18,7 +18,7 @@ from discrepancy import (
     PolynomialLibrary,
     SavitzkyGolay,
 )
-from discrepancy.control import as_casadi, plan_trajectory, replay, tvlqr
+from discrepancy.control import PAPER_Q, PAPER_R, as_casadi, plan_trajectory, replay, tvlqr
 from discrepancy.control.replay import interval_defects
 from discrepancy.control.sensitivity import parameter_sensitivity, state_transition
 from discrepancy.systems.double_pendulum_on_cart import STATE_NAMES, DoublePendulumOnCart
@@ -48,7 +48,7 @@ def make_plan(model, cost, *, guess=None, verbose=None):
     xb, ub = bounds()
     return plan_trajectory(model, x0=X_HANG, xf=X_UP, T=T, n_intervals=N_INTERVALS,
                            substeps=SUBSTEPS, cost=cost, x_bounds=xb, u_bounds=ub,
-                           initial_guess=guess, verbose=verbose)
+                           Q=PAPER_Q, R=PAPER_R, initial_guess=guess, verbose=verbose)
 
 
 def library():
@@ -179,9 +179,9 @@ def run(out_dir, *, quick: bool = False, verbose=None):
     plans = {"flawed_plan_paper_cost": (flawed_plan, f_flawed),
              "hybrid_plan_paper_cost": (hybrid_plan, f_hybrid),
              "hybrid_plan_min_effort": (effort_plan, f_hybrid)}
-    trackers = {"flawed": tvlqr(f_flawed, flawed_plan, u_bounds=ub),
-                "hybrid": tvlqr(f_hybrid, hybrid_plan, u_bounds=ub),
-                "effort": tvlqr(f_hybrid, effort_plan, u_bounds=ub)}
+    trackers = {"flawed": tvlqr(f_flawed, flawed_plan, Q=PAPER_Q, R=PAPER_R, u_bounds=ub),
+                "hybrid": tvlqr(f_hybrid, hybrid_plan, Q=PAPER_Q, R=PAPER_R, u_bounds=ub),
+                "effort": tvlqr(f_hybrid, effort_plan, Q=PAPER_Q, R=PAPER_R, u_bounds=ub)}
     strategies = {
         "flawed plan, open loop": (flawed_plan, flawed_plan.u),
         "flawed plan + TVLQR": (flawed_plan, trackers["flawed"]),
