@@ -140,3 +140,13 @@ def test_selection_figure_draws_the_path_and_marks_the_choice(vdp_data, helpers)
     assert chosen.get_xdata()[0] == 2 == np.count_nonzero(model.coef_[1])
     path = model.optimizer_.selection_[1]
     assert list(ax.get_lines()[0].get_xdata()) == path["n_terms"]
+
+
+def test_too_few_samples_for_the_folds_is_a_clear_error():
+    t = np.arange(300) * 0.01
+    x = np.c_[np.sin(t), np.cos(t)]
+    with pytest.raises(dc.errors.DataError, match="blocks of 512 samples.*300 samples"):
+        dc.DiscrepancyModel(differentiation_method="finite_difference").fit(x, t=0.01)
+    fixed = dc.DiscrepancyModel(differentiation_method="finite_difference",
+                                optimizer=dc.STLSQ(threshold=0.1)).fit(x, t=0.01)
+    assert fixed.coef_[0, 2] == pytest.approx(1.0, rel=1e-3)  # x1' = x2

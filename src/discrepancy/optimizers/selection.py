@@ -28,6 +28,7 @@ from copy import copy
 
 import numpy as np
 
+from ..errors import DataError
 from .base import solve_normal
 from .linear_constraints import LinearConstraints
 
@@ -101,6 +102,11 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
     p, n = stats.rhs.shape
     coef, chosen_thresholds, selection = np.zeros((n, p)), np.zeros(n), []
     use_cv = len(stats.usable_folds()) >= 2
+    if stats.folds is not None and not use_cv:
+        raise DataError(f"threshold='auto' cross-validates over contiguous blocks of "
+                        f"{stats.segment} samples and needs at least two; these data have "
+                        f"{stats.count} samples. Give more (or longer) trajectories, or a fixed "
+                        "threshold, e.g. STLSQ(threshold=0.05)")
     alpha = 0.0 if stlsq.unbias else stlsq.alpha
     for i in range(n):
         mask = None if constraints is None else LinearConstraints(
