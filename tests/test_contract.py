@@ -86,6 +86,7 @@ CASES = {
                                           x=X[:300]),
     "Kalman": _differentiator_case(lambda: dc.Kalman(alpha=0.1), x=X[:300]),
     "SmoothingSpline": _differentiator_case(dc.SmoothingSpline),
+    "Spectral": _differentiator_case(lambda: dc.Spectral(cutoff=0.5)),
     "WeakForm": Case(lambda: dc.WeakForm(61), lambda w: w, lambda w: np.hstack(w.rows(X, T, X)),
                      lambda w: None),
     "AutoSmoothing": _differentiator_case(dc.AutoSmoothing),

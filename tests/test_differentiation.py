@@ -36,7 +36,8 @@ CASES = {
 
 def test_every_registered_method_is_tested():
     # Dequantised needs quantised data (tests/test_dequantise.py); auto: tests/test_auto.py
-    assert set(available_methods()) == set(CASES) | {"dequantised", "auto", "weak"}  # test_weak
+    # spectral: tests/test_pysindy_parity.py (periodic data), weak: tests/test_weak.py
+    assert set(available_methods()) == set(CASES) | {"dequantised", "auto", "weak", "spectral"}
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

@@ -143,10 +143,20 @@ def test_selection_figure_draws_the_path_and_marks_the_choice(vdp_data, helpers)
 
 
 def test_too_few_samples_for_the_folds_is_a_clear_error():
-    t = np.arange(300) * 0.01
-    x = np.c_[np.sin(t), np.cos(t)]
-    with pytest.raises(dc.errors.DataError, match="blocks of 512 samples.*300 samples"):
-        dc.DiscrepancyModel(differentiation_method="finite_difference").fit(x, t=0.01)
+    t = np.arange(12) * 0.1
+    x = np.c_[t, t ** 2]               # x1' = 1, x2' = 2 x1: exact for finite differences
+    with pytest.raises(dc.errors.DataError, match="blocks of 16 samples.*12 samples"):
+        dc.DiscrepancyModel(differentiation_method="finite_difference").fit(x, t=0.1)
     fixed = dc.DiscrepancyModel(differentiation_method="finite_difference",
-                                optimizer=dc.STLSQ(threshold=0.1)).fit(x, t=0.01)
-    assert fixed.coef_[0, 2] == pytest.approx(1.0, rel=1e-3)  # x1' = x2
+                                optimizer=dc.STLSQ(threshold=0.1)).fit(x, t=0.1)
+    assert fixed.coef_[1, 1] == pytest.approx(2.0, rel=1e-6)
+
+
+def test_short_records_get_short_folds():
+    """400 samples: segments of 32 rows, five folds, the automatic threshold works."""
+    t = np.arange(400) * 0.05
+    x = np.exp(-0.1 * t)[:, None] * np.c_[np.sin(t), np.cos(t)]
+    model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(2)).fit(x, t=0.05)
+    assert model.setup_.fold_segment == 32 and len(model.statistics_.usable_folds()) == 5
+    names = model.get_feature_names()
+    assert {names[j] for j in np.flatnonzero(model.coef_[0])} == {"x1", "x2"}

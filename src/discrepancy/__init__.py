@@ -20,6 +20,7 @@ from .differentiation import (
     Kalman,
     SavitzkyGolay,
     SmoothingSpline,
+    Spectral,
     Spline,
     TrendFiltered,
     WeakForm,
@@ -33,6 +34,7 @@ __all__ = [
     "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "CustomLibrary", "Dequantised",
     "DiscrepancyModel", "DissipationDiscrepancy", "EnergyDiscrepancy", "FiniteDifference",
     "FourierLibrary", "GramStatistics", "HDF5Source", "Kalman", "Lasso", "NPZFiles",
-    "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spline", "TrendFiltered",
+    "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline",
+    "TrendFiltered",
     "WeakForm", "ZarrSource", "errors", "io", "load_model", "systems",
 ]

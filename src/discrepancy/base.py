@@ -105,6 +105,13 @@ class Estimator:
             raise NotFittedError(f"this {type(self).__name__} is not fitted yet; call "
                                  f"{self._fit_hint} first")
 
+    def __sklearn_tags__(self):
+        """scikit-learn's estimator tags (its grid searches ask for them); scikit-learn is
+        imported only when they are asked for."""
+        from sklearn.base import BaseEstimator
+
+        return BaseEstimator.__sklearn_tags__(self)
+
     def __repr__(self) -> str:
         shown = []
         for name, default in self._param_defaults().items():

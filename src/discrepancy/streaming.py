@@ -239,8 +239,11 @@ def setup_from_source(model, source: ChunkSource, step: float):
 
 
 def sample_rows_of(model) -> int:
-    """Rows a data-driven differentiation method of ``model`` looks at (0 if none)."""
+    """Rows read before the set-up is made: what a data-driven differentiation method of
+    ``model`` looks at, and at least what sizes the cross-validation segments."""
     from .differentiation import get_differentiation_method
+    from .models.setup import FOLD_PROBE_ROWS
 
     method = get_differentiation_method(model.differentiation_method)
-    return int(method.sample_rows) if getattr(method, "data_driven", False) else 0
+    own = int(method.sample_rows) if getattr(method, "data_driven", False) else 0
+    return max(own, FOLD_PROBE_ROWS)

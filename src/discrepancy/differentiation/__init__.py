@@ -3,9 +3,10 @@ from .auto import AutoSmoothing
 from .base import Differentiator, available_methods, get_differentiation_method
 from .dequantise import Dequantised
 from .methods import FiniteDifference, Kalman, SavitzkyGolay, Spline, TrendFiltered
+from .spectral import Spectral
 from .spline import SmoothingSpline
 from .weak import WeakForm
 
 __all__ = ["AutoSmoothing", "Dequantised", "Differentiator", "FiniteDifference", "Kalman",
-           "SavitzkyGolay", "SmoothingSpline", "Spline", "TrendFiltered", "WeakForm",
+           "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline", "TrendFiltered", "WeakForm",
            "available_methods", "get_differentiation_method"]

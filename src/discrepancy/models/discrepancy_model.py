@@ -53,6 +53,8 @@ class DiscrepancyModel(Estimator):
             ignored when ``x_dot`` is given to :meth:`fit`.
         state_names: names of the n states (default ``x1 ... xn``).
         input_names: names of the r inputs (default ``u`` for one, ``u1 ... ur`` for more).
+        discrete_time: a map ``x[k+1] = f_m(x[k], u[k]) + g(x[k], u[k])`` instead of an ODE
+            (no derivatives; ``simulate`` iterates the map; ``t`` is ignored by ``fit``).
         constraints: a :class:`~discrepancy.models.term_constraints.Constraints`: equations
             without correction, terms confined to some equations, linear (in)equalities on
             coefficients by name (needs an optimizer that takes constraints: STLSQ).
@@ -71,13 +73,14 @@ class DiscrepancyModel(Estimator):
         "differentiation_method": [None, InstanceOf(Differentiator, "a Differentiator"), _SPEC],
         "state_names": _NAMES, "input_names": _NAMES,
         "constraints": [None, InstanceOf(Constraints, "a discrepancy.Constraints")],
+        "discrete_time": [bool],
     }
     _fit_hint = "fit(x, t)"
     _fitted_attribute = "coef_"
 
     def __init__(self, prior=None, feature_library: FeatureLibrary | str | None = None,
                  optimizer=None, differentiation_method=None, *, state_names=None,
-                 input_names=None, constraints=None):
+                 input_names=None, constraints=None, discrete_time: bool = False):
         self.prior = prior
         self.feature_library = feature_library
         self.optimizer = optimizer
@@ -85,6 +88,7 @@ class DiscrepancyModel(Estimator):
         self.state_names = state_names
         self.input_names = input_names
         self.constraints = constraints
+        self.discrete_time = discrete_time
 
     # ----------------------------------------------------------------- fitting
     def fit(self, x, t=None, *args, u=None, x_dot=None) -> DiscrepancyModel:
@@ -219,10 +223,14 @@ class DiscrepancyModel(Estimator):
         ``u`` is an array ``(k, r)`` sampled at ``t`` (linearly interpolated, or held with
         ``u_hold="zoh"``) or a callable ``u(t) -> (r,)``. Keyword arguments go to
         :func:`discrepancy.models.simulation.integrate` (``method``, ``rtol``, ``atol``).
-        Returns ``(k, n)``.
+        Returns ``(k, n)``. A discrete-time model iterates its map: ``t`` is the number of
+        states to return (row 0 is ``x0``) and ``u`` has one row (or call ``u(k)``) per step.
         """
         keywords_only("simulate", args, "u")
         self.check_is_fitted()
+        if self.discrete_time:
+            from .discrete import iterate
+            return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_)
         return integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,
                          n_inputs=self.n_inputs_, **integrator_kws)
 

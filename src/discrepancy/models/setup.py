@@ -22,7 +22,11 @@ from .prior import Prior
 
 #: cross-validation folds kept in the statistics (contiguous segments dealt out in turn)
 N_FOLDS = 5
+#: segments are at most this long when the data allow two per fold (long segments keep the
+#: accumulation's products large; short data need shorter segments to have folds at all)
 MIN_SEGMENT = 512
+#: the data rows looked at to size the segments (the same prefix in memory and streamed)
+FOLD_PROBE_ROWS = 2 * N_FOLDS * MIN_SEGMENT
 
 
 @dataclass(frozen=True)
@@ -47,6 +51,8 @@ class FitSetup:
     optimizer: Optimizer
     differentiation: Differentiator
     choice: dict | None = None
+    discrete_time: bool = False
+    probe_rows: int = FOLD_PROBE_ROWS
 
     @property
     def variable_names(self) -> list[str]:
@@ -71,6 +77,9 @@ class FitSetup:
         residual ``x_dot - f_m`` ``(m, n)`` and the derivatives ``(m, n)``. In the weak form
         (:class:`~discrepancy.differentiation.WeakForm`) every quantity is integrated against
         each sample's test function instead, and ``z`` is already Θ."""
+        if self.discrete_time:
+            from .discrete import discrete_rows
+            return discrete_rows(self, trajectory)
         if trajectory.x_dot is None and isinstance(self.differentiation, WeakForm):
             return self._weak_rows(trajectory)
         if trajectory.x_dot is None:
@@ -105,11 +114,14 @@ class FitSetup:
     def fold_segment(self) -> int:
         """Rows per contiguous cross-validation segment: a power of two of at least twice
         the differentiation window (residuals of neighbouring rows are correlated over
-        about one window) and 512, at most one accumulation block."""
+        about one window) and of ``MIN_SEGMENT`` (512) or, for short data (``probe_rows``,
+        the rows of the first ``FOLD_PROBE_ROWS`` seen), of a tenth of them; at most one
+        accumulation block."""
         from ..accumulate import BLOCK_ROWS
 
         halo = self.differentiation.halo or 0
-        need = max(MIN_SEGMENT, 2 * (2 * halo + 1))
+        short = max(16, 1 << (max(1, self.probe_rows // (2 * N_FOLDS)).bit_length() - 1))
+        need = max(min(MIN_SEGMENT, short), 2 * (2 * halo + 1))
         return min(BLOCK_ROWS, 1 << (need - 1).bit_length())
 
     def new_statistics(self) -> GramStatistics:
@@ -164,8 +176,12 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
     elif isinstance(library, str):
         library = parse_library(library)
     library = copy.deepcopy(library).fit([*states, *inputs])
-    method = copy.deepcopy(get_differentiation_method(model.differentiation_method))
-    method, choice = _resolved(method, sample)
+    if model.discrete_time:
+        from .discrete import NextSample
+        method, choice = NextSample(), None
+    else:
+        method = copy.deepcopy(get_differentiation_method(model.differentiation_method))
+        method, choice = _resolved(method, sample)
     optimizer = copy.deepcopy(get_optimizer(model.optimizer))
     if model.constraints is not None:
         if "constraints" not in optimizer.get_params(deep=False):
@@ -173,8 +189,10 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
                                  f"{type(optimizer).__name__} does not")
         optimizer.set_params(constraints=model.constraints.compile(
             states, library.get_feature_names()))
+    probe = FOLD_PROBE_ROWS if sample is None else \
+        min(FOLD_PROBE_ROWS, sum(tr.n_samples for tr in sample))
     return FitSetup(tuple(states), tuple(inputs), Prior(model.prior, states, inputs), library,
-                    optimizer, method, choice)
+                    optimizer, method, choice, bool(model.discrete_time), probe)
 
 
 def _resolved(method, sample):

@@ -1,0 +1,69 @@
+"""Discrete-time models: maps ``x[k+1] = f_m(x[k], u[k]) + g(x[k], u[k])``.
+
+The regression target of sample ``k`` is ``x[k+1] - f_m(x[k], u[k])``; the last sample of
+a trajectory has no successor and gives no row. For chunked fits the successor is the one
+sample the next chunk carries over, so streamed and in-memory rows are the same.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.validation import check_array
+from ..differentiation.base import Differentiator
+from ..errors import ConvergenceError, ParameterError, ShapeError
+
+
+class NextSample(Differentiator):
+    """Stands in for a differentiation method in discrete-time fits: it pairs each sample
+    with the next (``halo`` 1 on the right, so chunk stitching keeps the successor)."""
+
+    @property
+    def halo(self) -> int:
+        return 1
+
+    @property
+    def min_samples(self) -> int:
+        return 2
+
+    def _compute(self, x, t):
+        raise NotImplementedError("discrete-time rows come from FitSetup.rows")
+
+
+def discrete_rows(setup, trajectory):
+    """``(z, y, x_next)`` of a trajectory for a map (``m - 1`` rows)."""
+    x, u = trajectory.x, trajectory.u
+    if len(x) < 2:
+        raise ShapeError("a discrete-time trajectory needs at least 2 samples")
+    u_now = None if u is None else u[:-1]
+    y = x[1:] - setup.prior(x[:-1], u_now)
+    z = x[:-1] if u is None else np.hstack([x[:-1], u_now])
+    return z, y, x[1:]
+
+
+def iterate(step, x0, steps, u, n_states: int, n_inputs: int) -> np.ndarray:
+    """States ``(steps, n)`` of ``x[k+1] = step(x[k], u[k])`` from ``x0`` (row 0 is ``x0``).
+
+    ``steps``: the number of states to return (an int), or an array of that length (its
+    values are not used: a map has no time). ``u``: ``(steps, r)`` (row ``k`` acts on step
+    ``k``; the last row is not used) or a callable of the step index.
+    """
+    n_steps = len(steps) if np.ndim(steps) == 1 else steps
+    if not isinstance(n_steps, (int, np.integer)) or isinstance(n_steps, bool) or n_steps < 1:
+        raise ParameterError(f"t must be the number of steps (an integer >= 1) or an array of "
+                             f"that length for a discrete-time model; got {steps!r:.60}")
+    x0 = check_array("x0", np.reshape(x0, (1, -1)), n_cols=n_states)
+    if n_inputs and u is None:
+        raise ShapeError(f"u is required: the model has {n_inputs} inputs")
+    if not n_inputs and u is not None:
+        raise ShapeError("u was given but the model has no inputs")
+    if n_inputs and not callable(u):
+        u = check_array("u", u, n_rows=int(n_steps), n_cols=n_inputs, allow_1d=True)
+    out = np.empty((int(n_steps), n_states))
+    out[0] = x0[0]
+    for k in range(int(n_steps) - 1):
+        uk = None if not n_inputs else (np.reshape(u(k), (1, n_inputs)) if callable(u)
+                                         else u[k:k + 1])
+        out[k + 1] = step(out[k:k + 1], uk)[0]
+        if not np.all(np.isfinite(out[k + 1])):
+            raise ConvergenceError(f"the map diverged at step {k + 1} (x = {out[k]})")
+    return out
