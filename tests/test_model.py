@@ -536,3 +536,38 @@ def test_arguments_after_t_must_be_named(vdp_data):
     model = dc.DiscrepancyModel()
     with pytest.raises(ParameterError, match="must be passed by name.*PySINDy"):
         model.fit(vdp_data.x, vdp_data.dt, vdp_data.x_dot)
+
+
+# ------------------------------------------------------------ sample weights
+
+def test_sample_weights_equal_numpy_weighted_least_squares(lorenz_data):
+    x, xd = lorenz_data.x, lorenz_data.x_dot
+    rng = np.random.default_rng(2)
+    noisy = xd + rng.standard_normal(xd.shape)
+    w = rng.uniform(0, 2, len(x))
+    model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(2),
+                                optimizer=dc.STLSQ(threshold=0.0)).fit(
+        x, t=lorenz_data.dt, x_dot=noisy, sample_weight=w)
+    theta = model.feature_library_.transform(x)
+    root = np.sqrt(w)[:, None]
+    expected = np.linalg.lstsq(theta * root, noisy * root, rcond=None)[0].T
+    np.testing.assert_allclose(model.coef_, expected, rtol=1e-8, atol=1e-10)
+    # streamed: the weights travel in the chunks and give the same model
+    chunks = iter([dc.Chunk(x[i:i + 700], x_dot=noisy[i:i + 700], weight=w[i:i + 700])
+                   for i in range(0, len(x), 700)])
+    streamed = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(2),
+                                   optimizer=dc.STLSQ(threshold=0.0)).fit(chunks, t=lorenz_data.dt)
+    np.testing.assert_allclose(streamed.coef_, expected, rtol=1e-8, atol=1e-10)
+
+
+def test_a_weight_per_trajectory_and_zero_weight_drops_a_trajectory(lorenz_data):
+    x, xd = lorenz_data.x, lorenz_data.x_dot
+    wrong = -xd                                  # a trajectory that must not count
+    model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(2),
+                                optimizer=dc.STLSQ(threshold=0.5))
+    model.fit([x, x], t=lorenz_data.dt, x_dot=[xd, wrong], sample_weight=[1.0, 0.0])
+    assert model.coef_[0, 1:3] == pytest.approx([-10, 10], rel=1e-6)
+    with pytest.raises(dc.errors.DataError, match="sample_weight must be >= 0"):
+        model.fit(x, t=lorenz_data.dt, x_dot=xd, sample_weight=-np.ones(len(x)))
+    with pytest.raises(ShapeError, match="sample_weight must have"):
+        model.fit(x, t=lorenz_data.dt, x_dot=xd, sample_weight=np.ones(3))

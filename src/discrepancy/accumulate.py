@@ -105,9 +105,11 @@ class BlockAccumulator:
         self._lanes = [self.total.empty_like() for _ in range(LANES)]
         self._blocks = 0
 
-    def add(self, z: np.ndarray, y: np.ndarray, signal: np.ndarray | None = None) -> None:
+    def add(self, z: np.ndarray, y: np.ndarray, signal: np.ndarray | None = None,
+            weight: np.ndarray | None = None) -> None:
         """Add rows ``z`` ``(k, n_variables)`` with targets ``y`` ``(k, n)`` (and the
-        derivatives ``signal`` ``(k, n)`` they came from; default ``y``)."""
+        derivatives ``signal`` ``(k, n)`` they came from, default ``y``; and the rows'
+        weights ``(k,)``, default 1)."""
         k = z.shape[0]
         if k == 0:
             return
@@ -122,13 +124,14 @@ class BlockAccumulator:
         with _single_threaded_blas():
             if threads == 1:
                 for i in range(LANES):
-                    self._run(i, work[i], z, y, signal, first)
+                    self._run(i, work[i], z, y, signal, weight, first)
             else:
                 groups = [list(range(i, LANES, threads)) for i in range(threads)]
                 list(_executor(threads).map(
-                    lambda g: [self._run(i, work[i], z, y, signal, first) for i in g], groups))
+                    lambda g: [self._run(i, work[i], z, y, signal, weight, first) for i in g],
+                    groups))
 
-    def _run(self, i, starts, z, y, signal, first) -> None:
+    def _run(self, i, starts, z, y, signal, weight, first) -> None:
         """Add the blocks starting at rows ``starts`` (data row ``first + s``) to lane ``i``.
 
         Each block fills rows of ``A = [Θ | y]ᵀ`` ``(p + n, k)`` and adds ``A Aᵀ``: one
@@ -144,6 +147,10 @@ class BlockAccumulator:
             self.transform(zb, out=buffer[:p, :k].T)
             buffer[p:, :k] = y[s:s + BLOCK_ROWS].T
             sb = signal[s:s + BLOCK_ROWS]
+            if weight is not None:  # rows times sqrt(w): the sums become weighted sums
+                root = np.sqrt(weight[s:s + BLOCK_ROWS])
+                buffer[:, :k] *= root
+                sb = sb * root[:, None]
             if lane.folds is None:
                 _add_product(lane, buffer[:, :k], sb, p)
                 continue
@@ -169,11 +176,12 @@ def _add_product(stats: GramStatistics, a: np.ndarray, signal: np.ndarray, p: in
 
 
 def accumulate(stats: GramStatistics, transform, z: np.ndarray, y: np.ndarray,
-               signal: np.ndarray | None = None, *,
+               signal: np.ndarray | None = None, weight: np.ndarray | None = None, *,
                n_threads: int | None = None) -> GramStatistics:
     """Add the statistics of one whole trajectory's rows ``z``, ``y`` (derivatives
-    ``signal``) to ``stats`` in place; its rows follow the ``stats.count`` rows before."""
+    ``signal``, row weights ``weight``) to ``stats`` in place; its rows follow the
+    ``stats.count`` rows before."""
     acc = BlockAccumulator(transform, stats, n_threads=n_threads)
-    acc.add(z, y, signal)
+    acc.add(z, y, signal, weight)
     acc.finish_trajectory()
     return stats

@@ -60,12 +60,13 @@ def _concat(a: Chunk, b: Chunk) -> Chunk:
 
 
 def residual_rows(setup, chunks: Iterable[Chunk]) -> Iterator[tuple[np.ndarray, ...]]:
-    """Yield ``(z, y, x_dot)`` for consecutive rows of one trajectory, equal to
+    """Yield ``(z, y, x_dot[, weight])`` for consecutive rows of one trajectory, equal to
     ``setup.rows`` of the whole trajectory (chunks validated)."""
     for window, lo, hi in _stitched(chunks, setup.differentiation):
         if hi > lo:
             rows = setup.rows(Trajectory(window.t, window.x, window.u, window.x_dot))
-            yield tuple(a[lo:hi] for a in rows)
+            weight = () if window.weight is None else (window.weight[:len(rows[0])],)
+            yield tuple(a[lo:hi] for a in (*rows, *weight))
 
 
 def _stitched(chunks, method):
@@ -159,8 +160,8 @@ def stream_statistics(source: ChunkSource, step: float, setup_for: Callable, *,
                     yield chunk
                     bar.update(chunk.n_rows)
 
-            for z, y, xd in residual_rows(setup, counted()):
-                feeder.add(z, y, xd)
+            for rows in residual_rows(setup, counted()):
+                feeder.add(*rows)
             feeder.end_trajectory()
     return setup, acc.total
 

@@ -17,7 +17,7 @@ import numpy as np
 from ..errors import ParameterError, ShapeError, describe
 from .validation import check_array, check_times
 
-FIELDS = ("x", "t", "u", "x_dot")
+FIELDS = ("x", "t", "u", "x_dot", "weight")
 
 
 @dataclass(frozen=True)
@@ -26,7 +26,8 @@ class Chunk:
 
     Attributes:
         x: states ``(k, n)``; t: times ``(k,)`` or ``None``; u: inputs ``(k, r)`` or
-        ``None``; x_dot: measured derivatives ``(k, n)`` or ``None``;
+        ``None``; x_dot: measured derivatives ``(k, n)`` or ``None``; weight: the rows'
+        weights in the regression ``(k,)`` or ``None``;
         where: description used in error messages (e.g. ``"run3.h5 rows 0..65535"``).
     """
 
@@ -34,6 +35,7 @@ class Chunk:
     t: np.ndarray | None = None
     u: np.ndarray | None = None
     x_dot: np.ndarray | None = None
+    weight: np.ndarray | None = None
     where: str | None = None
 
     @property
@@ -125,7 +127,7 @@ def _check(name, a, chunk, offset, *, rows, cols, ndim=2):
 def _validate(chunk: Chunk, layout: _Layout, offset: int, step: float, t_last) -> Chunk:
     x = _check("x", chunk.x, chunk, offset, rows=None, cols=layout.n)
     k = x.shape[0]
-    for f in ("t", "u", "x_dot"):
+    for f in ("t", "u", "x_dot", "weight"):
         if (getattr(chunk, f) is None) == layout.has[f]:
             state = "has no" if layout.has[f] else "has"
             raise ShapeError(f"{chunk.where}: chunk {state} {f}, unlike the first chunk; every "
@@ -137,7 +139,11 @@ def _validate(chunk: Chunk, layout: _Layout, offset: int, step: float, t_last) -
         t = check_times("t", step, k, where=chunk.where, row_offset=offset)
     else:
         t = check_times("t", chunk.t, k, where=chunk.where, after=t_last, row_offset=offset)
-    return Chunk(x, t, u, xd, chunk.where)
+    from .trajectory import check_weight
+
+    w = None if chunk.weight is None else check_weight("weight", chunk.weight, k,
+                                                       where=chunk.where, row_offset=offset)
+    return Chunk(x, t, u, xd, w, chunk.where)
 
 
 def _validated(items: Iterable, traj: int, step: float, layout: _Layout | None):
@@ -157,7 +163,8 @@ def _validated(items: Iterable, traj: int, step: float, layout: _Layout | None):
             if x.ndim != 2:
                 raise ShapeError(f"{where}: x must be 2-D (rows, states); got shape {x.shape}")
             layout = _Layout(x.shape[1], 0 if u is None else (1 if u.ndim == 1 else u.shape[1]),
-                             {f: getattr(chunk, f) is not None for f in ("t", "u", "x_dot")})
+                             {f: getattr(chunk, f) is not None
+                              for f in ("t", "u", "x_dot", "weight")})
         chunk = _validate(chunk, layout, offset, step, t_last)
         if chunk.n_rows:
             yield layout, chunk

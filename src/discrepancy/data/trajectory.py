@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ShapeError, describe
+from ..errors import DataError, ShapeError, describe
 from .validation import check_array, check_finite, check_times, is_uniform  # noqa: F401
 
 
@@ -25,12 +25,14 @@ class Trajectory:
         x: states, shape ``(m, n)``.
         u: inputs, shape ``(m, r)``, or ``None``.
         x_dot: measured state derivatives, shape ``(m, n)``, or ``None``.
+        weight: non-negative weight of each sample in the regression, ``(m,)``, or ``None``.
     """
 
     t: np.ndarray
     x: np.ndarray
     u: np.ndarray | None = None
     x_dot: np.ndarray | None = None
+    weight: np.ndarray | None = None
 
     @property
     def n_samples(self) -> int:
@@ -60,7 +62,7 @@ def _as_list(name: str, value, k: int, *, broadcast: bool):
                      f"got {describe(value)}")
 
 
-def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
+def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None) -> list[Trajectory]:
     """Validate data and return a list of trajectories.
 
     Args:
@@ -70,6 +72,8 @@ def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
             ``None`` means a unit step.
         u: inputs ``(m, r)`` (or ``(m,)`` for one input), or a list per trajectory.
         x_dot: measured derivatives ``(m, n)``, or a list per trajectory.
+        sample_weight: weights of the samples in the regression: ``(m,)``, or a list per
+            trajectory of arrays or numbers (a number weighs a whole trajectory).
     """
     several = isinstance(x, (list, tuple))
     xs = list(x) if several else [x]
@@ -81,8 +85,9 @@ def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
                       broadcast=not isinstance(t, (list, tuple)) and np.ndim(t) == 0)
         us = _as_list("u", u, k, broadcast=u is None)
         xds = _as_list("x_dot", x_dot, k, broadcast=x_dot is None)
+        ws = _as_list("sample_weight", sample_weight, k, broadcast=sample_weight is None)
     else:
-        ts, us, xds = [1.0 if t is None else t], [u], [x_dot]
+        ts, us, xds, ws = [1.0 if t is None else t], [u], [x_dot], [sample_weight]
     out, n, r = [], None, None
     for i in range(k):
         tag = "" if k == 1 else f"[{i}]"
@@ -106,5 +111,18 @@ def as_trajectories(x, t=None, u=None, x_dot=None) -> list[Trajectory]:
             raise ShapeError(f"u must be given for all trajectories or none; u{tag} differs")
         xdi = None if xds[i] is None else as_2d(f"x_dot{tag}", xds[i], n_rows=m, n_cols=n,
                                                 allow_1d=True)
-        out.append(Trajectory(ti, xi, ui, xdi))
+        out.append(Trajectory(ti, xi, ui, xdi, check_weight(f"sample_weight{tag}", ws[i], m)))
     return out
+
+
+def check_weight(name: str, weight, m: int, *, where: str | None = None,
+                 row_offset: int = 0) -> np.ndarray | None:
+    """Sample weights ``(m,)`` from ``None``, a number (every sample) or an array."""
+    if weight is None:
+        return None
+    w = check_array(name, np.full(m, weight) if np.ndim(weight) == 0 else weight, ndim=1,
+                    n_rows=m, where=where, row_offset=row_offset)
+    if np.any(w < 0):
+        raise DataError(f"{name} must be >= 0; found {w[np.argmax(w < 0)]} at row "
+                        f"{row_offset + int(np.argmax(w < 0))}")
+    return w

@@ -91,7 +91,7 @@ class DiscrepancyModel(Estimator):
         self.discrete_time = discrete_time
 
     # ----------------------------------------------------------------- fitting
-    def fit(self, x, t=None, *args, u=None, x_dot=None) -> DiscrepancyModel:
+    def fit(self, x, t=None, *args, u=None, x_dot=None, sample_weight=None) -> DiscrepancyModel:
         """Learn the discrepancy from measured states.
 
         Args:
@@ -100,12 +100,18 @@ class DiscrepancyModel(Estimator):
             t: time step or times ``(m,)`` (or a list per trajectory); default step 1.
             u: inputs ``(m, r)`` or a list per trajectory (keyword only).
             x_dot: measured derivatives ``(m, n)``; skips numerical differentiation.
+            sample_weight: weight of each sample in the regression, ``(m,)``, or a list per
+                trajectory of arrays or numbers (a number weighs a whole trajectory). Chunked
+                data carry them in the chunks (``Chunk(x, weight=...)``).
 
         Returns:
             self
         """
-        keywords_only("fit", args, "u and x_dot")
+        keywords_only("fit", args, "u, x_dot and sample_weight")
         kind = data_kind(x)
+        if kind != "arrays" and sample_weight is not None:
+            raise ParameterError("with chunked or dask x, give sample weights inside the chunks "
+                                 "(Chunk(x, weight=...)); dask arrays take none")
         if kind == "dask":
             from ..distributed import dask_statistics
             setup, stats = dask_statistics(self, x, t=t, u=u, x_dot=x_dot)
@@ -113,7 +119,7 @@ class DiscrepancyModel(Estimator):
             from ..streaming import chunk_statistics
             setup, stats = chunk_statistics(self, x, t=t, u=u, x_dot=x_dot)
         else:
-            trajectories = as_trajectories(x, t, u, x_dot)
+            trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
             first = trajectories[0]
             setup = self.make_setup(first.x.shape[1], 0 if first.u is None else first.u.shape[1],
                                     sample=trajectories)
@@ -286,7 +292,8 @@ class DiscrepancyModel(Estimator):
         return score(self, x, t, u, x_dot, metric=metric)
 
     def bootstrap(self, x, t=None, *args, u=None, x_dot=None, n_resamples: int = 200,
-                  block_length: int | None = None, method: str = "wild", seed: int = 0):
+                  block_length: int | None = None, method: str = "wild", seed: int = 0,
+                  sample_weight=None):
         """Uncertainty of every term: a block bootstrap of the fit on these data.
 
         ``method="wild"`` (repeat the experiment with new noise) or ``"pairs"`` (also
@@ -298,7 +305,8 @@ class DiscrepancyModel(Estimator):
         from .uncertainty import bootstrap
         keywords_only("bootstrap", args, "u, x_dot and the options")
         return bootstrap(self, x, t, u, x_dot, n_resamples=n_resamples,
-                         block_length=block_length, method=method, seed=seed)
+                         block_length=block_length, method=method, seed=seed,
+                         sample_weight=sample_weight)
 
     def predict_interval(self, x, u=None, *, uncertainty, level: float = 0.95):
         """Pointwise ``level`` band ``(low, high)``, each ``(m, n)``, of the hybrid

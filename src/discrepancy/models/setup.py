@@ -140,7 +140,8 @@ class FitSetup:
 
         stats = self.new_statistics() if into is None else into
         z, y, x_dot = self.rows(trajectory)
-        return accumulate(stats, self.transform, z, y, x_dot)
+        weight = None if trajectory.weight is None else trajectory.weight[:len(z)]
+        return accumulate(stats, self.transform, z, y, x_dot, weight)
 
 
 def _copy_into(theta: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarray:

@@ -79,7 +79,8 @@ class CoefficientUncertainty:
         return self.table()
 
 
-def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int | None = None):
+def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int | None = None,
+                     sample_weight=None):
     """Per-block Gram statistics of the fitted model's residuals: ``(blocks, folds, length)``.
 
     Blocks are contiguous and nest in the fit's cross-validation segments (their length
@@ -88,7 +89,7 @@ def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int 
     same cross-validation, in every resample.
     """
     setup = model.setup_
-    trajectories = as_trajectories(x, t, u, x_dot)
+    trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
     total = sum(tr.n_samples for tr in trajectories)
     segment = setup.fold_segment
     length = block_length or _default_block(total, segment, setup.differentiation.halo or 0)
@@ -105,7 +106,8 @@ def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int 
             stop = min(len(z), start + length - (row + start) % length)
             stats = GramStatistics(setup.n_features, setup.n_states)
             rows = slice(start, stop)
-            blocks.append(stats.add(setup.transform(z[rows]), y[rows], xd[rows]))
+            weight = None if tr.weight is None else tr.weight[rows]
+            blocks.append(stats.add(setup.transform(z[rows]), y[rows], xd[rows], weight))
             folds.append(((row + start) // segment) % n_folds)
             start = stop
         row += len(z)
@@ -151,8 +153,8 @@ def _resampled_statistics(gram, rhs, yy, signal, counts, folds, n_folds, segment
 
 
 def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
-              block_length: int | None = None, method: str = "wild",
-              seed: int = 0) -> CoefficientUncertainty:
+              block_length: int | None = None, method: str = "wild", seed: int = 0,
+              sample_weight=None) -> CoefficientUncertainty:
     """Bootstrap the coefficients of a fitted model on (its training) data; see module doc."""
     from tqdm.auto import tqdm
 
@@ -162,7 +164,8 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
         raise ParameterError(f"n_resamples must be an integer >= 2; got {n_resamples!r}")
     if method not in ("wild", "pairs"):
         raise ParameterError(f"method must be 'wild' or 'pairs'; got {method!r}")
-    blocks, folds, length = block_statistics(model, x, t, u, x_dot, block_length=block_length)
+    blocks, folds, length = block_statistics(model, x, t, u, x_dot, block_length=block_length,
+                                             sample_weight=sample_weight)
     gram = np.stack([b.gram for b in blocks])
     rhs = np.stack([b.rhs for b in blocks])
     yy = np.stack([b.yy for b in blocks])

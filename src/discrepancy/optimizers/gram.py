@@ -56,16 +56,21 @@ class GramStatistics:
             self.folds = [GramStatistics(self.p, self.n) for _ in range(self.n_folds)]
 
     def add(self, theta: np.ndarray, y: np.ndarray, signal: np.ndarray | None = None,
-            *, first_row: int = 0) -> GramStatistics:
+            weight: np.ndarray | None = None, *, first_row: int = 0) -> GramStatistics:
         """Add the rows of ``theta`` ``(m, p)`` and ``y`` ``(m, n)`` (and ``signal`` = ``ẋ``
-        ``(m, n)``, default ``y``); ``first_row`` is the data row of ``theta[0]`` (for folds)."""
+        ``(m, n)``, default ``y``; row weights ``(m,)``, default 1); ``first_row`` is the
+        data row of ``theta[0]`` (for folds)."""
         if theta.shape[1] != self.p or y.shape[1] != self.n or theta.shape[0] != y.shape[0]:
             raise ShapeError(f"chunk must be theta (m, {self.p}) and y (m, {self.n}); "
                              f"got {theta.shape} and {y.shape}")
+        if weight is not None:
+            root = np.sqrt(weight)[:, None]
+            theta, y = theta * root, y * root
+            signal = None if signal is None else signal * root
         if self.folds is not None:
             for lo, hi, fold in self.pieces(first_row, theta.shape[0]):
                 self.folds[fold].add(theta[lo:hi], y[lo:hi],
-                                     None if signal is None else signal[lo:hi])
+                                     y[lo:hi] if signal is None else signal[lo:hi])
             self._sum_folds()
             return self
         self.gram += theta.T @ theta
