@@ -321,8 +321,12 @@ def test_u_given_to_a_model_without_inputs():
 def test_simulation_blow_up_is_a_convergence_error():
     x = np.linspace(0.1, 1.0, 50)[:, None]
     m = model(feature_library=dc.PolynomialLibrary(degree=2)).fit(x, t=1.0, x_dot=x**2)
-    with pytest.raises(errors.ConvergenceError, match="integration stopped"):
-        m.simulate([1.0], np.linspace(0, 2, 21))  # x' = x^2 blows up at t = 1
+    with pytest.raises(errors.SimulationError, match="stopped at t = 1") as info:
+        m.simulate([1.0], np.linspace(0, 2, 21))  # x' = x^2 from 1 blows up at t = 1
+    assert isinstance(info.value, errors.ConvergenceError)
+    partial, times = info.value.partial, info.value.times
+    assert len(times) == len(partial) and times[-1] < 1.0  # the states before the blow-up
+    assert np.allclose(partial[:, 0], 1.0 / (1.0 - times), rtol=1e-6)  # exact: 1 / (1 - t)
 
 
 # ------------------------------------------------------------------ model file

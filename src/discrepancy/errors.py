@@ -51,6 +51,19 @@ class ConvergenceError(DiscrepancyError, RuntimeError):
     """A solver (ODE, optimiser, IPOPT) did not reach a valid solution."""
 
 
+class SimulationError(ConvergenceError):
+    """A simulation stopped early (blow-up, failed step, evaluation budget spent).
+
+    Attributes:
+        time: the time it stopped at; state: the state there ``(n,)``;
+        partial: the states at the output times reached ``(k', n)``, and ``times`` ``(k',)``.
+    """
+
+    def __init__(self, message: str, *, time: float, state, partial, times):
+        super().__init__(message)
+        self.time, self.state, self.partial, self.times = time, state, partial, times
+
+
 class ConvergenceWarning(UserWarning):
     """An iterative solver stopped at its iteration limit; its last iterate is used."""
 

@@ -228,7 +228,10 @@ class DiscrepancyModel(Estimator):
 
         ``u`` is an array ``(k, r)`` sampled at ``t`` (linearly interpolated, or held with
         ``u_hold="zoh"``) or a callable ``u(t) -> (r,)``. Keyword arguments go to
-        :func:`discrepancy.models.simulation.integrate` (``method``, ``rtol``, ``atol``).
+        :func:`discrepancy.models.simulation.integrate` (``method``, ``rtol``, ``atol``,
+        ``max_evaluations``); a model with a discontinuous term (``sign``) is stepped with
+        fixed-step RK4 on ``t`` unless a method is given. A simulation that blows up or runs
+        out of its evaluation budget raises SimulationError with the partial trajectory.
         Returns ``(k, n)``. A discrete-time model iterates its map: ``t`` is the number of
         states to return (row 0 is ``x0``) and ``u`` has one row (or call ``u(k)``) per step.
         """
@@ -237,8 +240,19 @@ class DiscrepancyModel(Estimator):
         if self.discrete_time:
             from .discrete import iterate
             return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_)
+        if "method" not in integrator_kws and self._has_jumps():
+            integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
         return integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,
                          n_inputs=self.n_inputs_, **integrator_kws)
+
+    def _has_jumps(self) -> bool:
+        """Whether an active term or the (symbolic) prior is discontinuous (``sign``)."""
+        import sympy as sp
+
+        active = [self.feature_expressions_[j]
+                  for j in np.flatnonzero(np.any(self.coef_ != 0, axis=0))]
+        prior = self.prior_.expressions or []
+        return any(e.has(sp.sign) for e in [*active, *prior])
 
     def _rhs_one(self, x: np.ndarray, u: np.ndarray | None) -> np.ndarray:
         """``f_m + g`` for a batch of states without re-validation (hot path of simulate)."""
