@@ -1,4 +1,6 @@
 """File loading: the same arrays come back from every format; bad files get clear errors."""
+from pathlib import Path
+
 import h5py
 import numpy as np
 import pytest
@@ -78,3 +80,50 @@ def test_errors_name_what_is_wrong(tmp_path, arrays):
 def _touch(path):
     path.write_text("1,2\n")
     return path
+
+
+# ------------------------------------------------------------ CSV as files come
+
+def test_csv_with_bom_quoted_names_and_an_empty_trailing_column(tmp_path):
+    path = tmp_path / "d.csv"
+    path.write_bytes('\ufeff"t","a","b",\n0,1,2,\n0.5,3,4,\n'.encode())
+    d = io.load(path)
+    assert d.state_names == ["a", "b"]  # the byte order mark did not hide the time column
+    np.testing.assert_array_equal(d.t, [0.0, 0.5])
+    np.testing.assert_array_equal(d.x, [[1, 2], [3, 4]])
+
+
+def test_a_column_filled_in_the_first_row_only_is_read_only_when_asked_for(tmp_path):
+    path = tmp_path / "d.csv"
+    path.write_text('"u","y","Ts",\n1,2,4,\n3,4,,\n5,6,,\n')
+    d = io.load(path, states=["y"], inputs=["u"], time=None)
+    np.testing.assert_array_equal(d.x[:, 0], [2, 4, 6])
+    np.testing.assert_array_equal(d.u[:, 0], [1, 3, 5])
+    with pytest.raises(DataError, match=r"line 3, column 'Ts': an empty cell"):
+        io.load(path)
+
+
+@pytest.mark.parametrize("text, match", [
+    ("t,a,a\n0,1,2\n", r"names \['a'\] more than once"),
+    ("t,,a\n0,1,2\n", "header column 2 has no name"),
+    ("t,a\n0,1\n1,2,3\n", r"line 3: 3 cells, more than the header's 2"),
+    ("t,a,b\n0,1,2\n1,2\n", r"line 3: 2 cells; the header has 3"),
+    ("t,a\n0,1\n1,x\n", r"line 3, column 'a': non-numeric value 'x'"),
+    ("\n\n", "empty"),
+    ("t,a\n", "no data rows"),
+])
+def test_malformed_csv_files_are_refused_with_the_line_and_column(tmp_path, text, match):
+    path = tmp_path / "d.csv"
+    path.write_text(text)
+    with pytest.raises(DataError, match=match):
+        io.load(path)
+
+
+@pytest.mark.parametrize("folder, name, columns", [
+    ("cascaded_tanks", "dataBenchmark.csv", ["uEst", "uVal", "yEst", "yVal"]),
+    ("silverbox", "SNLS80mV.csv", ["V1", "V2"])])
+def test_the_benchmark_files_load_as_they_are(folder, name, columns):
+    path = Path(__file__).parents[1] / "paper/src/discrepancy_paper/data" / folder / name
+    d = io.load(path, states=columns, time=None)
+    truth = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=range(len(columns)))
+    np.testing.assert_array_equal(d.x, truth)

@@ -5,13 +5,13 @@ Formats are read with their standard libraries (``csv``/numpy, ``numpy.load`` wi
 """
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import DataError, UnknownNameError
+from .csv_table import CSVTable
 from .trajectory import as_2d, as_times
 
 SUFFIXES = {".csv": "csv", ".txt": "csv", ".npz": "npz", ".mat": "mat", ".h5": "hdf5",
@@ -58,41 +58,34 @@ def load(path, *, states=None, inputs=None, time: str | None = "t") -> LoadedDat
         raise UnknownNameError(f"path {path.name!r}: unknown file type {path.suffix!r}; "
                                f"valid suffixes: {', '.join(sorted(SUFFIXES))}")
     if kind == "csv":
-        return _from_columns(path, *_read_csv(path), states, inputs, time)
+        return _from_csv(path, states, inputs, time)
     variables = _read_variables(path, kind)
     return _from_variables(path, variables, states, inputs, time, matlab=kind == "mat")
 
 
-def _read_csv(path: Path):
-    with open(path, newline="") as f:
-        rows = [r for r in csv.reader(f) if any(cell.strip() for cell in r)]
-    if len(rows) < 2:
-        raise DataError(f"{path.name}: a CSV file needs a header row and data rows")
-    header = [h.strip() for h in rows[0]]
-    while header and header[-1] == "":
-        header.pop()
-    try:
-        data = np.array([[float(c) for c in r[:len(header)]] for r in rows[1:]])
-    except ValueError as e:
-        raise DataError(f"{path.name}: non-numeric value in the data rows ({e})") from None
-    return header, data
-
-
-def _from_columns(path, header, data, states, inputs, time):
-    def pick(names):
-        missing = [n for n in names if n not in header]
+def _from_csv(path: Path, states, inputs, time) -> LoadedData:
+    with CSVTable(path) as table:
+        header = table.header
+        inputs = [inputs] if isinstance(inputs, str) else list(inputs or [])
+        states = [states] if isinstance(states, str) else states
+        has_time = time is not None and time in header
+        if states is None:
+            states = [h for h in header if h not in inputs and not (has_time and h == time)]
+        states = list(states)
+        wanted = [*states, *inputs, *([time] if has_time else [])]
+        missing = [n for n in wanted if n not in header]
         if missing:
             raise UnknownNameError(f"{path.name}: columns {missing} not found; the file has "
                                    f"{header}")
-        return data[:, [header.index(n) for n in names]]
-    inputs = list(inputs or [])
-    has_time = time is not None and time in header
-    if states is None:
-        states = [h for h in header if h not in inputs and not (has_time and h == time)]
-    x = as_2d(f"{path.name} states", pick(list(states)))
-    u = as_2d(f"{path.name} inputs", pick(inputs)) if inputs else None
-    t = as_times(f"{path.name} column {time!r}", pick([time])[:, 0], len(x)) if has_time else None
-    return LoadedData(x, t, u, list(states), inputs)
+        data = table.read([header.index(n) for n in wanted])
+    if len(data) == 0:
+        raise DataError(f"{path.name}: a CSV file needs a header row and data rows; it has "
+                        "no data rows")
+    n_x, n_u = len(states), len(inputs)
+    x = as_2d(f"{path.name} states", data[:, :n_x])
+    u = as_2d(f"{path.name} inputs", data[:, n_x:n_x + n_u]) if inputs else None
+    t = as_times(f"{path.name} column {time!r}", data[:, -1], len(x)) if has_time else None
+    return LoadedData(x, t, u, states, inputs)
 
 
 def read_mat(path, *, what: str = "file") -> dict[str, np.ndarray]:

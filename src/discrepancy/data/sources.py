@@ -22,6 +22,7 @@ import numpy as np
 from .._optional import require
 from ..errors import ShapeError, UnknownNameError
 from .chunks import Chunk, ChunkSource
+from .csv_table import CSVTable
 
 DEFAULT_CHUNK = 65536
 FIELDS = ("x", "t", "u", "x_dot")
@@ -214,25 +215,20 @@ class CSVFiles(_TableFiles):
     _what = "column"
 
     def _file_chunks(self, path):
-        with open(path, newline="") as fh:
-            header = [h.strip() for h in fh.readline().strip().split(",")]
+        with CSVTable(path) as table:
+            header = table.header
             self._missing(path, header)
-            cols = {k: ([header.index(n)] if isinstance(n, str) else [header.index(c) for c in n])
+            cols = {k: [n] if isinstance(n, str) else list(n)
                     for k, n in self.names.items() if n is not None}
+            flat = [header.index(c) for names in cols.values() for c in names]
             start = 0
             while True:
-                lines = list(itertools.islice(fh, self.chunk_size))
-                if not lines:
+                block = table.read(flat, max_rows=self.chunk_size)
+                if len(block) == 0:
                     return
-                try:
-                    block = np.loadtxt(lines, delimiter=",", ndmin=2)
-                except ValueError as e:
-                    raise ShapeError(f"{path.name} lines {start + 2}..{start + len(lines) + 1}: "
-                                     f"not a numeric table with {len(header)} columns ({e})") \
-                        from None
-                if block.shape[1] != len(header):
-                    raise ShapeError(f"{path.name} lines {start + 2}..: {block.shape[1]} columns; "
-                                     f"the header has {len(header)}")
-                parts = {k: block[:, c] if k != "t" else block[:, c[0]] for k, c in cols.items()}
-                yield Chunk(**parts, where=f"{path.name} rows {start}..{start + len(lines) - 1}")
-                start += len(lines)
+                parts, j = {}, 0
+                for k, names in cols.items():
+                    parts[k] = block[:, j] if k == "t" else block[:, j:j + len(names)]
+                    j += len(names)
+                yield Chunk(**parts, where=f"{path.name} rows {start}..{start + len(block) - 1}")
+                start += len(block)
