@@ -63,6 +63,18 @@ def test_dask_array_fit_equals_in_memory(x, diff):
     assert ref.coefficients()[1, 6] == pytest.approx(-1.0, abs=1e-3)  # the x1 x3 term of Lorenz
 
 
+@pytest.mark.parametrize("chunk", [500, 7])
+def test_dask_blocks_shorter_than_a_window_equal_in_memory(x, chunk):
+    """A last block of one row (2501 = 5 * 500 + 1) or every block shorter than the window:
+    regrouped so every window is whole, the same statistics as in memory."""
+    part = x[:2501]
+    diff = dc.SavitzkyGolay(window_length=31)
+    ref = model(diff).fit(part, t=DT)
+    got = model(diff).fit(da.from_array(part, chunks=(chunk, 3)), t=DT)
+    assert got.statistics_.count == part.shape[0]
+    assert rel(got.statistics_.gram, ref.statistics_.gram) < 1e-12
+
+
 def test_dask_list_of_trajectories_with_x_dot_and_inputs(x):
     u = np.sin(np.arange(x.shape[0]) * DT)[:, None]
     xd = lorenz(x) + 0.5 * u

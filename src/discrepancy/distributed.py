@@ -109,15 +109,27 @@ def _trajectory_graph(setup, x, u, xd, step, trajectory, offset):
                                  "fits need a local one (FiniteDifference, SavitzkyGolay) or x_dot")
         need = max(setup.differentiation.min_samples, 2 * halo + 1)
         if min(x.chunks[0]) < need:
-            size = max(need, m // max(1, len(x.chunks[0])))
-            x = x.rechunk({0: size})
-            rows = rows.rechunk({0: x.chunks[0]})
-            args = [a.rechunk({0: x.chunks[0]}) for a in [x, *args[1:]]]
+            chunks = _row_chunks(m, max(need, m // max(1, len(x.chunks[0]))), need)
+            x = x.rechunk({0: chunks})
+            rows = rows.rechunk({0: chunks})
+            args = [a.rechunk({0: chunks}) for a in [x, *args[1:]]]
         blocks = da.map_overlap(_block, rows, *args, depth={0: halo, 1: 0}, boundary="none",
                                 trim=False, align_arrays=False, halo=halo, **common)
     else:
         blocks = da.map_blocks(_block, rows, *args, halo=0, **common)
     return blocks.sum(axis=0, split_every=SPLIT_EVERY)
+
+
+def _row_chunks(m: int, size: int, need: int) -> tuple[int, ...]:
+    """Row blocks of about ``size`` rows, none shorter than ``need`` (a short remainder joins
+    the last block), or one block when ``m < need``."""
+    chunks = [size] * (m // size)
+    rest = m - size * len(chunks)
+    if not chunks or rest >= need:
+        chunks.append(rest)
+    else:
+        chunks[-1] += rest
+    return tuple(c for c in chunks if c)
 
 
 def dask_statistics(model, x, *, t=None, u=None, x_dot=None):
