@@ -532,10 +532,29 @@ def test_specs_are_accepted_for_library_optimizer_and_differentiation(vdp_data, 
     assert np.count_nonzero(a) == 2 and abs(a[1, 2] - 0.4) < 0.01  # truth: 0.4 x2
 
 
-def test_arguments_after_t_must_be_named(vdp_data):
+def test_arguments_after_t_must_be_named(vdp_data, exact_model):
     model = dc.DiscrepancyModel()
     with pytest.raises(ParameterError, match="must be passed by name.*PySINDy"):
         model.fit(vdp_data.x, vdp_data.dt, vdp_data.x_dot)
+    x, dt, xd = vdp_data.x[:300], vdp_data.dt, vdp_data.x_dot[:300]
+    calls = {"score": lambda: exact_model.score(x, dt, None, xd),
+             "bootstrap": lambda: exact_model.bootstrap(x, dt, None),
+             "simulate": lambda: exact_model.simulate(x[0], np.arange(5) * dt, None)}
+    for name, call in calls.items():
+        with pytest.raises(ParameterError, match=rf"{name}: arguments after t .* by name"):
+            call()
+    with pytest.raises(ParameterError, match=r"simulate\(x0, t, u=u\)") as info:
+        calls["simulate"]()
+    assert "x_dot" not in str(info.value)   # simulate takes no derivatives
+
+
+@pytest.mark.parametrize(("t", "message"), [("1", "positive time step"),
+                                             ("fast", "positive time step"),
+                                             ([None, 0.01, 0.02], "finite.*row 0")])
+def test_bad_times_are_named(vdp_data, t, message):
+    x = vdp_data.x[:3] if isinstance(t, list) else vdp_data.x
+    with pytest.raises(dc.errors.DataError, match=message):
+        dc.DiscrepancyModel().fit(x, t=t)
 
 
 # ------------------------------------------------------------ sample weights

@@ -56,6 +56,11 @@ def test_times_given_per_trajectory(lorenz_runs):
     peer.fit(xs, t=ts)
     mine.fit(xs, t=ts)
     np.testing.assert_allclose(mine.coefficients(), peer.coefficients(), **TOL)
+    for a, b in zip(mine.predict(xs), peer.predict(xs), strict=True):
+        np.testing.assert_allclose(a, b, **TOL)
+    for x, tk in zip(xs, ts, strict=True):   # each trajectory simulated from its own start
+        np.testing.assert_allclose(mine.simulate(x[0], tk[:200], rtol=1e-12, atol=1e-12),
+                                   peer.simulate(x[0], tk[:200]), **TOL)
 
 
 def test_one_dimensional_x_is_one_state():
@@ -76,6 +81,10 @@ def test_given_x_dot(lorenz_data):
     peer.fit(x, t=lorenz_data.dt, x_dot=xd)
     mine.fit(x, t=lorenz_data.dt, x_dot=xd)
     np.testing.assert_allclose(mine.coefficients(), peer.coefficients(), **TOL)
+    np.testing.assert_allclose(mine.predict(x), peer.predict(x), **TOL)
+    t = np.arange(200) * lorenz_data.dt
+    np.testing.assert_allclose(mine.simulate(x[0], t, rtol=1e-12, atol=1e-12),
+                               peer.simulate(x[0], t), **TOL)
     np.testing.assert_allclose(mine.coefficients()[0, 1:3], [-10, 10], rtol=1e-6)
 
 
@@ -93,7 +102,7 @@ def test_callable_input_of_either_shape_simulates_like_pysindy(helpers, shape):
     np.testing.assert_allclose(mine.predict(x, samples), peer.predict(x, u=samples), **TOL)
     ours = mine.simulate(x[0], t[:300], u=u, rtol=1e-12, atol=1e-12)
     theirs = peer.simulate(x[0], t[:300], u=u)
-    np.testing.assert_allclose(ours, theirs, rtol=1e-7, atol=1e-8)
+    np.testing.assert_allclose(ours, theirs, **TOL)
 
 
 def test_a_positional_x_dot_is_refused_not_taken_as_u(lorenz_data):
