@@ -195,3 +195,51 @@ def test_print_with_other_left_hand_sides(lorenz_data, capsys):
     mine.print(lhs=["dx/dt", "dy/dt", "dz/dt"])
     lines = capsys.readouterr().out.splitlines()
     assert [line.split(" = ")[0] for line in lines[:3]] == ["dx/dt", "dy/dt", "dz/dt"]
+
+
+@pytest.mark.parametrize("options", [dict(reg_weight_lam=0.1), dict(reg_weight_lam=0.5,
+                                     regularizer="l1"),
+                                     dict(reg_weight_lam=0.01, regularizer="l2",
+                                          relax_coeff_nu=0.5),
+                                     dict(reg_weight_lam=0.05, normalize_columns=True),
+                                     dict(reg_weight_lam=0.1, unbias=True)])
+def test_sr3_equals_pysindy(lorenz_data, options):
+    x, dt = lorenz_data.x, lorenz_data.dt
+    peer = ps.SINDy(optimizer=ps.SR3(**options), differentiation_method=ps.FiniteDifference())
+    mine = dc.DiscrepancyModel(optimizer=dc.SR3(**options),
+                               differentiation_method=dc.FiniteDifference())
+    peer.fit(x, t=dt)
+    mine.fit(x, t=dt)
+    np.testing.assert_allclose(mine.coefficients(), peer.coefficients(), **TOL)
+
+
+def test_differentiate_equals_pysindy(lorenz_runs):
+    xs, dt = lorenz_runs
+    _, mine = pair()
+    np.testing.assert_allclose(mine.differentiate(xs[0], dt),
+                               ps.FiniteDifference()(xs[0], dt), **TOL)
+    assert [d.shape for d in mine.differentiate(xs, dt)] == [x.shape for x in xs]
+
+
+def test_discrete_successors_given_as_x_dot():
+    """Successors given as x_dot (PySINDy 1's fit(x[:-1], x_dot=x[1:]); DiscreteSINDy's
+    x_next) are the targets (they were ignored before), so scoring x as its own successor
+    is poor."""
+    x = np.empty((200, 1))
+    x[0] = 0.4
+    for k in range(199):
+        x[k + 1] = 3.6 * x[k] * (1 - x[k])
+    peer = ps.DiscreteSINDy(optimizer=ps.STLSQ(threshold=0.01))
+    mine = dc.DiscrepancyModel(discrete_time=True, optimizer=dc.STLSQ(threshold=0.01))
+    peer.fit(x[:-1], t=1, x_next=x[1:])
+    mine.fit(x[:-1], x_dot=x[1:])
+    np.testing.assert_allclose(mine.coefficients(), peer.coefficients(), **TOL)
+    np.testing.assert_allclose(mine.coefficients()[0, 1:], [3.6, -3.6], rtol=1e-10)
+    assert mine.score(x, x_dot=x) == pytest.approx(peer.score(x, t=1, x_next=x), rel=1e-8)
+    assert mine.score(x, x_dot=x) < 0.5
+
+
+def test_stlsq_that_runs_out_of_iterations_warns_like_pysindy(lorenz_data):
+    with pytest.warns(dc.errors.ConvergenceWarning, match="did not converge"):
+        dc.DiscrepancyModel(optimizer=dc.STLSQ(threshold=0.1, max_iter=1)).fit(
+            lorenz_data.x, t=lorenz_data.dt)

@@ -28,13 +28,13 @@ from .differentiation import (
 from .energy import DissipationDiscrepancy, EnergyDiscrepancy
 from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
 from .models import Constraints, DiscrepancyModel, load_model
-from .optimizers import STLSQ, GramStatistics, Lasso
+from .optimizers import SR3, STLSQ, GramStatistics, Lasso
 
 __all__ = [
     "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "CustomLibrary", "Dequantised",
     "DiscrepancyModel", "DissipationDiscrepancy", "EnergyDiscrepancy", "FiniteDifference",
     "FourierLibrary", "GramStatistics", "HDF5Source", "Kalman", "Lasso", "NPZFiles",
-    "PolynomialLibrary", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline",
+    "PolynomialLibrary", "SR3", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline",
     "TrendFiltered",
     "WeakForm", "ZarrSource", "errors", "io", "load_model", "systems",
 ]

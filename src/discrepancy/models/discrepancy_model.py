@@ -130,6 +130,18 @@ class DiscrepancyModel(Estimator):
                 setup.statistics(trajectory, into=stats)
         return self.fit_statistics(stats, setup)
 
+    def differentiate(self, x, t=None):
+        """Derivatives ``(m, n)`` of ``x`` (or a list, one per trajectory) by this model's
+        differentiation method, as ``fit`` would estimate them (``"auto"`` chooses from
+        ``x`` itself; PySINDy's ``differentiate``)."""
+        if self.discrete_time:
+            raise ParameterError("a discrete-time model has no derivatives to estimate")
+        trajectories = as_trajectories(x, t)
+        n = trajectories[0].x.shape[1]
+        method = self.make_setup(n, 0, sample=trajectories).differentiation
+        out = [method(tr.x, tr.t)[1] for tr in trajectories]
+        return out if isinstance(x, (list, tuple)) else out[0]
+
     def make_setup(self, n_states: int, n_inputs: int, *, sample=None) -> FitSetup:
         """The frozen set-up (names, prior, library, optimizer, differentiation) of this
         model's parameters for ``n_states`` states and ``n_inputs`` inputs. Its

@@ -30,8 +30,12 @@ class NextSample(Differentiator):
 
 
 def discrete_rows(setup, trajectory):
-    """``(z, y, x_next)`` of a trajectory for a map (``m - 1`` rows)."""
+    """``(z, y, x_next)`` of a trajectory for a map: ``m - 1`` rows, or ``m`` rows when the
+    successors are given as ``x_dot`` (PySINDy's ``fit(x[:-1], x_dot=x[1:])``)."""
     x, u = trajectory.x, trajectory.u
+    if trajectory.x_dot is not None:
+        y = trajectory.x_dot - setup.prior(x, u)
+        return (x if u is None else np.hstack([x, u])), y, trajectory.x_dot
     if len(x) < 2:
         raise ShapeError("a discrete-time trajectory needs at least 2 samples")
     u_now = None if u is None else u[:-1]

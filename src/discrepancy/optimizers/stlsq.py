@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from ..constraints import InstanceOf, Integral, Interval, Options, Real
-from ..errors import ParameterError, ShapeError
+from ..errors import ConvergenceWarning, ParameterError, ShapeError
 from .base import Optimizer, register, solve_normal
 from .linear_constraints import LinearConstraints, constrained_solve
 
@@ -100,7 +100,7 @@ class STLSQ(Optimizer):
                 break
         else:
             warnings.warn(f"STLSQ did not converge after {self.max_iter} iterations",
-                          stacklevel=3)
+                          ConvergenceWarning, stacklevel=3)
         if self.unbias:
             support = (np.abs(coef) > 1e-14) | keep
             coef = constrained_solve(gram, rhs, support, constraints) if constraints.has_linear \
