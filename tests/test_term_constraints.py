@@ -94,3 +94,46 @@ def test_standalone_optimizer_takes_index_form_constraints():
     reference = lsq_linear(theta, y, bounds=([-np.inf, -1.5, -np.inf, -np.inf], np.inf),
                            method="bvls", tol=1e-14).x
     np.testing.assert_allclose(coef, reference, atol=1e-9)
+
+
+def test_a_coupled_inequality_equals_the_kkt_solution_in_memory_chunked_and_on_dask(data):
+    """x2' may use x2 and x1^2 x2 with coef(x2) - coef(x1^2 x2) <= 0.7 (the truth has
+    0.4 + 0.4 = 0.8, so the constraint is active): the answer is the equality-constrained
+    least squares of the explicit design matrix (its KKT system solved with numpy), with a
+    non-negative multiplier; the same through chunks and a dask array."""
+    da = pytest.importorskip("dask.array")
+    x, prior = data
+    rule = dc.Constraints(exact_equations=["x1"],
+                          at_most=[({("x2", "x2"): 1.0, ("x2", "x1^2 x2"): -1.0}, 0.7)])
+    model = constrained(prior, rule).fit(x, t=0.01)
+    names = model.get_feature_names()
+    z, y = model.residual(dc.data.Trajectory(np.arange(len(x)) * 0.01, x))
+    theta = model.feature_library_.transform(z)
+    a = np.zeros(theta.shape[1])
+    a[names.index("x2")], a[names.index("x1^2 x2")] = 1.0, -1.0
+    free = np.linalg.lstsq(theta, y[:, 1], rcond=None)[0]
+    assert a @ free > 0.7                                   # unconstrained: violated
+    p = theta.shape[1]
+    kkt = np.block([[theta.T @ theta, a[:, None]], [a[None, :], np.zeros((1, 1))]])
+    solution = np.linalg.solve(kkt, np.r_[theta.T @ y[:, 1], 0.7])
+    assert solution[p] > 0                                  # its multiplier: the bound binds
+    np.testing.assert_allclose(model.coef_[1], solution[:p], atol=1e-8)
+    chunks = iter([x[i:i + 333] for i in range(0, len(x), 333)])
+    np.testing.assert_allclose(constrained(prior, rule).fit(chunks, t=0.01).coef_,
+                               model.coef_, atol=1e-8)
+    on_dask = constrained(prior, rule).fit(da.from_array(x, chunks=(500, 2)), t=0.01)
+    np.testing.assert_allclose(on_dask.coef_, model.coef_, atol=1e-8)
+
+
+def test_constraints_hold_with_the_automatic_threshold(data):
+    """The default threshold='auto' chooses supports under the constraints: no correction in
+    the kinematic equation, the bound respected, the true terms kept."""
+    x, prior = data
+    rule = dc.Constraints(exact_equations=["x1"], at_most=[({("x2", "x2"): 1.0}, 0.3)])
+    model = dc.DiscrepancyModel(prior=prior, feature_library=dc.PolynomialLibrary(3),
+                                constraints=rule).fit(x, t=0.01)
+    names = model.get_feature_names()
+    assert not model.coef_[0].any()
+    assert model.coef_[1, names.index("x2")] <= 0.3 + 1e-10
+    assert model.coef_[1, names.index("x2")] == pytest.approx(0.3, abs=1e-6)
+    assert model.coef_[1, names.index("x1^2 x2")] < -0.3
