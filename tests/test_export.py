@@ -194,3 +194,21 @@ def test_to_sympy_of_a_callable_prior_model_is_the_discrepancy(samples):
     assert all(abs(float(t.as_coeff_Mul()[0])) < 1e-9 for t in terms), difference
     with pytest.raises(ExportError):
         model.to_sympy(part="hybrid")
+
+
+def test_saturations_evaluate_store_and_export_exactly():
+    """Min and Max (a sensor that saturates, an overflow) are exact terms: numpy, model
+    files and CasADi agree with the definition on points on both sides of each kink."""
+    import casadi as ca
+
+    from discrepancy.symbolic import compile_numpy, from_data, to_casadi, to_data
+    a, b = sp.symbols("a b", real=True)
+    expr = sp.Min(a, 10) + 2 * sp.Max(a - b, 0, b)
+    points = np.array([[12.0, 3.0], [4.0, 5.0], [-1.0, -2.0], [10.0, 10.0]])
+    truth = np.minimum(points[:, 0], 10) + 2 * np.maximum.reduce(
+        [points[:, 0] - points[:, 1], np.zeros(4), points[:, 1]])
+    np.testing.assert_allclose(compile_numpy(expr, ["a", "b"])(points), truth)
+    assert from_data(to_data(expr)) == expr
+    z = ca.SX.sym("z", 2)
+    f = ca.Function("f", [z], [to_casadi(expr, {"a": z[0], "b": z[1]})])
+    np.testing.assert_allclose([float(f(p)) for p in points], truth)

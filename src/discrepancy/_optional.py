@@ -8,6 +8,7 @@ h5py: clusters and large files), ``[plots]`` (matplotlib, pillow), ``[paper]`` (
 from __future__ import annotations
 
 import importlib
+import importlib.util
 
 from .errors import MissingDependencyError
 
@@ -25,3 +26,8 @@ def require(module: str, *, purpose: str):
         raise MissingDependencyError(
             f"{purpose} needs {module.split('.')[0]}, which is not installed; install it with "
             f"pip install 'discrepancy[{extra}]'") from None
+
+
+def missing(module: str) -> bool:
+    """Whether ``module`` cannot be imported (for optional fast paths that fall back)."""
+    return importlib.util.find_spec(module) is None

@@ -32,6 +32,10 @@ FUNCTIONS: dict[str, tuple[Callable, Callable, str | None]] = {
     "acos": (sp.acos, np.arccos, "acos"), "Abs": (sp.Abs, np.abs, "fabs"),
     "sign": (sp.sign, np.sign, "sign"),
 }
+# functions of two or more arguments (saturations, clipping): same triple, applied pairwise
+NARY_FUNCTIONS: dict[str, tuple[Callable, Callable, str]] = {
+    "Min": (sp.Min, np.minimum, "fmin"), "Max": (sp.Max, np.maximum, "fmax"),
+}
 
 
 def symbol(name: str) -> sp.Symbol:
@@ -98,6 +102,8 @@ def compile_numpy(expr: sp.Expr, names: Sequence[str],
         if name in FUNCTIONS:
             f = FUNCTIONS[name][1]
             return lambda Z: f(args[0](Z))
+        if name in NARY_FUNCTIONS:
+            return lambda Z: _reduce(NARY_FUNCTIONS[name][1], args, Z)
         if isinstance(e, sp.core.function.AppliedUndef) and name in functions:
             f = functions[name]
             return lambda Z: np.asarray(f(*[a(Z) for a in args]), dtype=float)
@@ -140,7 +146,8 @@ def to_data(expr: sp.Expr):
     if expr.is_Pow:
         return ["pow", to_data(expr.args[0]), to_data(expr.args[1])]
     name = type(expr).__name__
-    if name in FUNCTIONS or isinstance(expr, sp.core.function.AppliedUndef):
+    if name in FUNCTIONS or name in NARY_FUNCTIONS or \
+            isinstance(expr, sp.core.function.AppliedUndef):
         return ["fn", name, *[to_data(a) for a in expr.args]]
     if expr.is_number:
         return ["float", float(expr)]
@@ -237,6 +244,10 @@ def _read_fn(r, args, depth):
         if len(fargs) != 1:
             raise r.bad(f"{name} takes one argument, got {len(fargs)}")
         return r.bounded(FUNCTIONS[name][0](fargs[0]))
+    if name in NARY_FUNCTIONS:
+        if len(fargs) < 2:
+            raise r.bad(f"{name} takes at least two arguments, got {len(fargs)}")
+        return r.bounded(NARY_FUNCTIONS[name][0](*fargs))
     if r.functions is not None and name not in r.functions:
         raise r.bad(f"function {name!r} is neither built in nor a declared user function")
     if not fargs:
@@ -288,6 +299,11 @@ def to_casadi(expr: sp.Expr, variables: Mapping[str, object], *, term: str | Non
         name = type(e).__name__
         if name in FUNCTIONS and FUNCTIONS[name][2]:
             return getattr(ca, FUNCTIONS[name][2])(args[0])
+        if name in NARY_FUNCTIONS:
+            out = args[0]
+            for a in args[1:]:
+                out = getattr(ca, NARY_FUNCTIONS[name][2])(out, a)
+            return out
         raise ExportError(f"term {term or e} cannot be exported to CasADi: {name} is a "
                           "numpy-only function with no symbolic form; use sympy expressions "
                           "(e.g. CustomLibrary(expressions=[...])) for terms you want to export")

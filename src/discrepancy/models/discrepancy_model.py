@@ -187,6 +187,7 @@ class DiscrepancyModel(Estimator):
         self._active_terms = [compile_numpy(self.feature_expressions_[j], self.variable_names_,
                                             functions) for j in active]
         self._active_coef = self.coef_[:, active].T
+        self._compiled_steps = {}   # CasADi steppers of these coefficients, by substeps
 
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(Z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m`` ``(m, n)``."""
@@ -237,14 +238,19 @@ class DiscrepancyModel(Estimator):
         self.check_is_fitted()
         return int(np.count_nonzero(self.coef_))
 
-    def simulate(self, x0, t, *args, u=None, **integrator_kws) -> np.ndarray:
+    def simulate(self, x0, t, *args, u=None, compiled: bool = True,
+                 **integrator_kws) -> np.ndarray:
         """Trajectory of the hybrid model from ``x0`` ``(n,)`` at times ``t`` ``(k,)``.
 
-        ``u`` is an array ``(k, r)`` sampled at ``t`` (linearly interpolated, or held with
-        ``u_hold="zoh"``) or a callable ``u(t) -> (r,)``. Keyword arguments go to
+        ``u`` is an array ``(k, r)`` sampled at ``t`` (between samples ``u_hold="linear"``,
+        ``"zoh"`` or ``"bandlimited"``, see :mod:`discrepancy.models.inputs`) or a callable
+        ``u(t) -> (r,)``. Keyword arguments go to
         :func:`discrepancy.models.simulation.integrate` (``method``, ``rtol``, ``atol``,
-        ``max_evaluations``); a model with a discontinuous term (``sign``) is stepped with
-        fixed-step RK4 on ``t`` unless a method is given. A simulation that blows up or runs
+        ``substeps``, ``max_evaluations``); a model with a discontinuous term (``sign``) is
+        stepped with fixed-step RK4 on ``t`` unless a method is given. ``method="rk4"`` with
+        a sampled or no input runs compiled by CasADi when it is installed and the model can
+        be expressed in it (``compiled=False`` steps in Python; same numbers): the fast way
+        to simulate long records with measured inputs. A simulation that blows up or runs
         out of its evaluation budget raises SimulationError with the partial trajectory.
         Returns ``(k, n)``. A discrete-time model iterates its map: ``t`` is the number of
         states to return (row 0 is ``x0``) and ``u`` has one row (or call ``u(k)``) per step.
@@ -256,6 +262,10 @@ class DiscrepancyModel(Estimator):
             return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_)
         if "method" not in integrator_kws and self._has_jumps():
             integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
+        if integrator_kws.get("method") == "rk4" and compiled and not callable(u):
+            from .fast_simulation import compiled_stepper
+            integrator_kws["compiled"] = compiled_stepper(self, x0, u,
+                                                          integrator_kws.get("substeps", 4))
         return integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,
                          n_inputs=self.n_inputs_, **integrator_kws)
 

@@ -16,8 +16,9 @@ from collections.abc import Callable
 import numpy as np
 import scipy.integrate
 
-from ..data.trajectory import as_2d, as_times
+from ..data.trajectory import as_times
 from ..errors import ParameterError, ShapeError, SimulationError, describe
+from .inputs import input_law, stage_inputs
 
 ADAPTIVE = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 METHODS = (*ADAPTIVE, "rk4")
@@ -30,38 +31,6 @@ class _Stop(Exception):
     def __init__(self, why: str, time: float, state):
         super().__init__(why)
         self.why, self.time, self.state = why, float(time), np.asarray(state, float).copy()
-
-
-def input_law(u, t: np.ndarray, n_inputs: int, *, hold: str = "linear") -> Callable | None:
-    """``u(τ) -> (r,)`` from an array sampled at ``t`` or a callable (checked at every call).
-
-    ``hold="linear"`` interpolates between samples; ``"zoh"`` holds each sample until the next.
-    """
-    if n_inputs == 0:
-        if u is not None:
-            raise ShapeError("u was given but the model has no inputs")
-        return None
-    if u is None:
-        raise ShapeError(f"u is required: the model has {n_inputs} inputs")
-    if callable(u):
-        def law(tau):  # checked at every call: a law may change shape or go NaN later
-            value = np.asarray(u(tau), dtype=float)
-            if value.size != n_inputs or value.ndim > 2 or not np.all(np.isfinite(value)):
-                raise ShapeError(f"u(t) must return {n_inputs} finite value(s), shape "
-                                 f"({n_inputs},) or (1, {n_inputs}); at t = {tau:.6g} it "
-                                 f"returned shape {value.shape}: {value.ravel()[:4]}")
-            return value.reshape(n_inputs)
-        law(float(t[0]))
-        return law
-    samples = as_2d("u", u, n_rows=len(t), n_cols=n_inputs, allow_1d=True)
-    if hold == "zoh":
-        def held(tau):
-            i = min(max(int(np.searchsorted(t, tau, side="right")) - 1, 0), len(t) - 1)
-            return samples[i]
-        return held
-    if hold != "linear":
-        raise ParameterError(f"u_hold must be 'linear' or 'zoh'; got {hold!r}")
-    return lambda tau: np.array([np.interp(tau, t, samples[:, j]) for j in range(n_inputs)])
 
 
 def _check_options(method, rtol, atol, substeps, max_evaluations):
@@ -83,16 +52,20 @@ def _check_options(method, rtol, atol, substeps, max_evaluations):
 def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
               method: str = "LSODA", rtol: float = 1e-10, atol: float = 1e-10,
               u_hold: str = "linear", substeps: int = 4, max_evaluations: int | None = None,
-              **solver_kws) -> np.ndarray:
+              compiled: Callable | None = None, **solver_kws) -> np.ndarray:
     """Solve ``dx/dt = rhs(x, u(t))`` from ``x0`` and return the states at ``t`` ``(k, n)``.
 
     Args:
         method: an adaptive scipy method (``"LSODA"`` default) or ``"rk4"`` (fixed steps,
-            ``substeps`` per output interval).
+            ``substeps`` per output interval, the input taken at the stage times).
         rtol, atol: tolerances of the adaptive methods.
-        u_hold: ``"linear"`` or ``"zoh"`` between input samples.
+        u_hold: ``"linear"``, ``"zoh"`` or ``"bandlimited"`` between input samples (see
+            :mod:`discrepancy.models.inputs`).
         max_evaluations: right-hand-side evaluations allowed (default ``500`` per output
             sample, at least 1e5).
+        compiled: for ``"rk4"``, ``compiled(x0, stages, h) -> (k - 1, n)``, a compiled map of
+            the same steps (see :mod:`discrepancy.models.fast_simulation`); ``None`` steps in
+            Python.
 
     Raises:
         SimulationError (a ConvergenceError) when the solution stops early: a non-finite
@@ -109,19 +82,25 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
         raise ShapeError(f"t must be a 1-D array of at least 2 output times (the first is the "
                          f"time of x0); got {describe(t)}")
     times = as_times("t", t, np.size(t))
-    law = input_law(u, times, n_inputs, hold=u_hold)
-    budget = max_evaluations or max(MIN_EVALUATIONS, EVALUATIONS_PER_SAMPLE * len(times))
     out = np.full((len(times), n_states), np.nan)
     out[0] = x0
+    if method == "rk4":
+        stages = stage_inputs(u, times, n_inputs, substeps, hold=u_hold) if n_inputs else \
+            input_law(u, times, 0)
+        if compiled is not None:
+            return _checked(compiled(x0, stages, np.diff(times)), out, times)
+    else:
+        law = input_law(u, times, n_inputs, hold=u_hold)
+    budget = max_evaluations or max(MIN_EVALUATIONS, EVALUATIONS_PER_SAMPLE * len(times))
     calls = [0]
 
-    def f(tau, x):
+    def f(tau, x, u_now):
         calls[0] += 1
         if calls[0] > budget:
             raise _Stop(f"the budget of {budget} right-hand-side evaluations is spent (stiff "
                         "or discontinuous dynamics; try method='rk4', or raise "
                         "max_evaluations)", tau, x)
-        dx = rhs(x[None, :], None if law is None else law(tau)[None, :])[0]
+        dx = rhs(x[None, :], None if u_now is None else u_now[None, :])[0]
         if not np.all(np.isfinite(dx)):
             raise _Stop("the right-hand side became non-finite (the solution diverges)",
                         tau, x)
@@ -130,16 +109,33 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
     try:
         with np.errstate(over="ignore", invalid="ignore"):
             if method == "rk4":
-                _fixed_step(f, times, out, substeps)
+                _fixed_step(f, times, out, substeps, stages if n_inputs else None)
             else:
-                _adaptive(f, times, out, method, rtol, atol, solver_kws)
+                _adaptive(lambda tau, x: f(tau, x, None if law is None else law(tau)),
+                          times, out, method, rtol, atol, solver_kws)
     except _Stop as stop:
-        reached = int(np.sum(np.all(np.isfinite(out), axis=1)))
-        raise SimulationError(
-            f"simulation stopped at t = {stop.time:.6g} of {times[-1]:.6g} at x = "
-            f"{np.array2string(stop.state, precision=4)}: {stop.why}",
-            time=stop.time, state=stop.state, partial=out[:reached],
-            times=times[:reached]) from None
+        _raise_stopped(stop.why, stop.time, stop.state, out, times)
+    return out
+
+
+def _raise_stopped(why, time, state, out, times):
+    reached = int(np.sum(np.all(np.isfinite(out), axis=1)))
+    raise SimulationError(
+        f"simulation stopped at t = {time:.6g} of {times[-1]:.6g} at x = "
+        f"{np.array2string(np.asarray(state, float), precision=4)}: {why}",
+        time=time, state=state, partial=out[:reached], times=times[:reached]) from None
+
+
+def _checked(states, out, times):
+    """The compiled path's states ``(k - 1, n)`` after ``x0``, stopped at the first
+    non-finite one as the stepped path would stop."""
+    out[1:] = states
+    bad = ~np.all(np.isfinite(out), axis=1)
+    if bad.any():
+        first = int(np.argmax(bad))
+        out[first:] = np.nan
+        _raise_stopped("the state became non-finite (the solution diverges)",
+                       times[first - 1], out[first - 1], out, times)
     return out
 
 
@@ -158,16 +154,18 @@ def _adaptive(f, times, out, method, rtol, atol, solver_kws):
                 i += 1
 
 
-def _fixed_step(f, times, out, substeps):
+def _fixed_step(f, times, out, substeps, stages):
     x = out[0].copy()
     for i in range(1, len(times)):
         h = (times[i] - times[i - 1]) / substeps
         tau = times[i - 1]
-        for _ in range(substeps):
-            k1 = f(tau, x)
-            k2 = f(tau + h / 2, x + h / 2 * k1)
-            k3 = f(tau + h / 2, x + h / 2 * k2)
-            k4 = f(tau + h, x + h * k3)
+        s = None if stages is None else stages[i - 1]
+        for j in range(substeps):
+            u0, um, u1 = (None, None, None) if s is None else s[2 * j:2 * j + 3]
+            k1 = f(tau, x, u0)
+            k2 = f(tau + h / 2, x + h / 2 * k1, um)
+            k3 = f(tau + h / 2, x + h / 2 * k2, um)
+            k4 = f(tau + h, x + h * k3, u1)
             x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             tau += h
         out[i] = x
