@@ -62,7 +62,8 @@ def _as_list(name: str, value, k: int, *, broadcast: bool):
                      f"got {describe(value)}")
 
 
-def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None) -> list[Trajectory]:
+def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
+                    x_name: str = "x") -> list[Trajectory]:
     """Validate data and return a list of trajectories.
 
     Args:
@@ -74,11 +75,12 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None) -> list[T
         x_dot: measured derivatives ``(m, n)``, or a list per trajectory.
         sample_weight: weights of the samples in the regression: ``(m,)``, or a list per
             trajectory of arrays or numbers (a number weighs a whole trajectory).
+        x_name: the argument's name in error messages (``"y"`` for measured outputs).
     """
     several = isinstance(x, (list, tuple))
     xs = list(x) if several else [x]
     if not xs:
-        raise ShapeError("x must hold at least one trajectory; got an empty list")
+        raise ShapeError(f"{x_name} must hold at least one trajectory; got an empty list")
     k = len(xs)
     if several:
         ts = _as_list("t", 1.0 if t is None else t, k,
@@ -91,15 +93,16 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None) -> list[T
     out, n, r = [], None, None
     for i in range(k):
         tag = "" if k == 1 else f"[{i}]"
-        xi = as_2d(f"x{tag}", xs[i], allow_1d=True)  # 1-D: one state, as in PySINDy
+        xi = as_2d(f"{x_name}{tag}", xs[i], allow_1d=True)  # 1-D: one state, as in PySINDy
         if n is None:
             n = xi.shape[1]
         elif xi.shape[1] != n:
-            raise ShapeError(f"every trajectory in x must have {n} state columns like x[0]; "
-                             f"x{tag} has shape {xi.shape}")
+            raise ShapeError(f"every trajectory in {x_name} must have {n} columns like "
+                             f"{x_name}[0]; {x_name}{tag} has shape {xi.shape}")
         m = xi.shape[0]
         if m < 2:
-            raise ShapeError(f"x{tag} must have at least 2 samples; got shape {xi.shape}")
+            raise ShapeError(f"{x_name}{tag} must have at least 2 samples; got shape "
+                             f"{xi.shape}")
         ti = as_times(f"t{tag}", ts[i], m)
         ui = None if us[i] is None else as_2d(f"u{tag}", us[i], n_rows=m, allow_1d=True)
         if ui is not None:

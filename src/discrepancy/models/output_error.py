@@ -1,0 +1,213 @@
+"""Output-error fits: the discrepancy and the unmeasured states from what is measured.
+
+When only some states (or functions of them) are recorded, the derivative of every state
+is not available and the usual regression cannot be formed. Here the hybrid model is
+simulated from an estimated initial state with the measured input (RK4 at the input's
+stage times, see :mod:`discrepancy.models.shooting`) and its coefficients and initial
+states are chosen to minimise the simulation error of the recorded outputs (Gauss–Newton
+with a trust region: scipy's ``least_squares`` on exact CasADi derivatives).
+
+Sparsity: the whole library is fitted first (with a small ridge on coefficients scaled to
+their equation), then terms are removed one at a time, the least important first, each
+support refitted. With ``threshold="auto"`` the supports are fitted on the first part of
+every record and scored by how well they forecast the rest (free simulation of the held-out
+end); the sparsest support within ``tolerance`` of the best forecast is refitted on all the
+data. A fixed threshold instead drops terms whose coefficients stay below it.
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.optimize
+
+from ..data.trajectory import as_trajectories
+from ..errors import DataError, ParameterError, ShapeError
+from .inputs import check_hold, stage_inputs
+
+#: relative ridge on the scaled coefficients while supports are compared
+RIDGE = 1e-6
+#: terms whose scaled size is below this share of the largest are dropped together
+NEGLIGIBLE = 1e-3
+
+
+class _Record:
+    """One trajectory: times, outputs ``(m, k)``, stage inputs and step lengths."""
+
+    def __init__(self, trajectory, n_inputs, substeps, hold):
+        self.t, self.y, self.u = trajectory.t, trajectory.x, trajectory.u
+        self.h = np.diff(self.t)
+        self.stages = None if not n_inputs else stage_inputs(self.u, self.t, n_inputs,
+                                                              substeps, hold=hold)
+        self.m = len(self.t)
+
+
+class OutputErrorFit:
+    """The pieces of one fit: model discretisation, records, output map and scales."""
+
+    def __init__(self, setup, records, out_map, shooting, allowed):
+        self.setup, self.records, self.out_map = setup, records, out_map
+        self.shooting, self.allowed = shooting, allowed
+        y = np.vstack([r.y for r in records])
+        spread = y.std(axis=0)
+        self.y_scale = np.where(spread > 0, spread, np.maximum(np.abs(y).max(axis=0), 1.0))
+        self.n, self.p = setup.n_states, setup.n_features
+        self.coef_scale = np.ones(self.n * self.p)      # set from the data by set_coef_scale
+
+    # ---------------------------------------------------------------- residuals
+    def _parts(self, theta, support):
+        index = np.flatnonzero(support.ravel())
+        coef = np.zeros(self.n * self.p)
+        coef[index] = theta[:len(index)] * self.coef_scale[index]
+        x0s = theta[len(index):].reshape(len(self.records), self.n)
+        return index, coef, x0s
+
+    def residuals(self, theta, support, rows, ridge, *, jacobian: bool = True):
+        """Residual vector (and its Jacobian) for ``theta`` = [scaled coefficients of
+        ``support``, x0 of every record]; ``rows[i]``: the samples of record ``i`` fitted.
+        Without ``jacobian`` only the simulation runs (trial steps)."""
+        index, coef, x0s = self._parts(theta, support)
+        total = sum(int(r.sum()) for r in rows) * self.out_map.k
+        parts, jacobians = [], []
+        width = len(index) + x0s.size
+        for i, (record, fit_rows) in enumerate(zip(self.records, rows, strict=True)):
+            if not jacobian:
+                states = self.shooting.simulate(x0s[i], record.stages, record.h, coef)
+                parts.append(((self.out_map(states[fit_rows]) - record.y[fit_rows])
+                              / self.y_scale).ravel())
+                continue
+            sens = self.shooting.sensitivities(x0s[i], record.stages, record.h, coef)
+            states = sens.states[fit_rows]
+            parts.append(((self.out_map(states) - record.y[fit_rows]) / self.y_scale).ravel())
+            dh = self.out_map.jacobian(states) / self.y_scale[None, :, None]   # (m, k, n)
+            jac = np.zeros((states.shape[0], self.out_map.k, width))
+            jac[:, :, :len(index)] = np.einsum("mkn,mnc->mkc", dh,
+                                               sens.d_coef[fit_rows][:, :, index]) \
+                * self.coef_scale[index]
+            offset = len(index) + i * self.n
+            jac[:, :, offset:offset + self.n] = np.einsum("mkn,mnj->mkj", dh,
+                                                          sens.d_x0[fit_rows])
+            jacobians.append(jac.reshape(-1, width))
+        scale = 1 / np.sqrt(max(total, 1))
+        r = np.concatenate(parts) * scale
+        if ridge and len(index):
+            r = np.concatenate([r, np.sqrt(ridge) * theta[:len(index)]])
+        if not np.all(np.isfinite(r)):
+            r = np.full_like(r, 1e6)                       # a diverging trial is rejected
+        if not jacobian:
+            return r
+        J = np.vstack(jacobians) * scale
+        if ridge and len(index):
+            J = np.vstack([J, np.sqrt(ridge) * np.eye(len(index), width)])
+        return r, np.nan_to_num(J)
+
+    def solve(self, support, coef, x0s, rows, ridge, *, max_evaluations: int = 200):
+        """Least squares from ``coef`` ``(n, p)`` and ``x0s``; returns ``(coef, x0s, cost)``.
+        ``max_evaluations`` bounds the simulations (supports on the path that fit badly
+        need not converge far to be seen to be bad)."""
+        index = np.flatnonzero(support.ravel())
+        theta0 = np.concatenate([coef.ravel()[index] / self.coef_scale[index], x0s.ravel()])
+        result = scipy.optimize.least_squares(
+            lambda th: self.residuals(th, support, rows, ridge, jacobian=False), theta0,
+            jac=lambda th: self.residuals(th, support, rows, ridge)[1], method="trf",
+            x_scale="jac", max_nfev=max_evaluations, xtol=1e-9, ftol=1e-9, gtol=1e-9)
+        _, flat, x0s = self._parts(result.x, support)
+        return flat.reshape(self.n, self.p), x0s, float(2 * result.cost)
+
+    # ------------------------------------------------------------------ scores
+    def simulate_outputs(self, coef, x0s):
+        return [self.out_map(self.shooting.simulate(x0, r.stages, r.h, coef))
+                for x0, r in zip(x0s, self.records, strict=True)]
+
+    def error(self, coef, x0s, rows) -> float:
+        """RMS of the scaled output error on the given rows of every record."""
+        sims = self.simulate_outputs(coef, x0s)
+        errs = [((s - r.y) / self.y_scale)[w] for s, r, w in zip(sims, self.records, rows,
+                                                                   strict=True)]
+        e = np.concatenate([a.ravel() for a in errs])
+        return float(np.sqrt(np.mean(e ** 2))) if np.all(np.isfinite(e)) else np.inf
+
+    def set_coef_scale(self, x0s):
+        """Scale of each coefficient: its equation's derivative scale over its column's RMS
+        along the prior's simulation, so that scaled sizes compare across terms."""
+        theta_rms, dx_rms = [], []
+        zero = np.zeros((self.n, self.p))
+        for x0, r in zip(x0s, self.records, strict=True):
+            states = self.shooting.simulate(x0, r.stages, r.h, zero)
+            theta_rms.append(np.mean(self.shooting.theta(states, r.u) ** 2, axis=0))
+            dx_rms.append(np.mean((np.diff(states, axis=0) / r.h[:, None]) ** 2, axis=0))
+        theta = np.sqrt(np.mean(theta_rms, axis=0))
+        dx = np.sqrt(np.mean(dx_rms, axis=0))
+        dx = np.where(dx > 0, dx, max(float(dx.max()), 1.0))
+        theta = np.where(theta > 0, theta, 1.0)
+        self.coef_scale = (dx[:, None] / theta[None, :]).ravel()
+
+    def importance(self, coef) -> np.ndarray:
+        return np.abs(coef.ravel()) / self.coef_scale
+
+
+def records_of(model, y, t, u, substeps, hold):
+    trajectories = as_trajectories(y, t, u, x_name="y")
+    r = 0 if trajectories[0].u is None else trajectories[0].u.shape[1]
+    return [_Record(tr, r, substeps, check_hold(hold)) for tr in trajectories], r
+
+
+def n_states_of(model, x0) -> int:
+    if model.state_names is not None:
+        return 1 if isinstance(model.state_names, str) else len(model.state_names)
+    if isinstance(model.prior, (list, tuple)):
+        return len(model.prior)
+    if x0 is not None:
+        return int(np.shape(x0)[-1])
+    raise ParameterError("the number of states is unknown: give state_names, a prior as a "
+                         "list of sympy expressions, or x0")
+
+
+def initial_states(x0, records, out_map, n) -> np.ndarray:
+    """``(records, n)`` initial guesses: given, or measured states from the first sample."""
+    if x0 is None:
+        return np.array([out_map.initial_guess(r.y[0]) for r in records])
+    x0s = np.asarray(x0, dtype=float).reshape(-1, n) if np.size(x0) % n == 0 else None
+    if x0s is None or len(x0s) not in (1, len(records)) or not np.all(np.isfinite(x0s)):
+        raise ShapeError(f"x0 must be {n} finite numbers (one per state), or one such row per "
+                         f"trajectory; got shape {np.shape(x0)}")
+    return np.repeat(x0s, len(records), axis=0) if len(x0s) == 1 else x0s
+
+
+def check_identifiable(fit, x0s, rows):
+    """Every state must move some output: a hidden state whose initial value changes no
+    output over the record cannot be estimated."""
+    support = np.zeros((fit.n, fit.p), bool)
+    theta = x0s.ravel()
+    _, J = fit.residuals(theta, support, rows, 0.0)
+    influence = np.linalg.norm(J.reshape(J.shape[0], -1, fit.n), axis=(0, 1))
+    dead = np.flatnonzero(influence <= 1e-9 * max(float(influence.max()), 1e-300))
+    if dead.size:
+        names = [fit.setup.state_names[i] for i in dead]
+        raise DataError(f"state(s) {names} do not influence the measured outputs "
+                        f"{fit.out_map.names} over the record, so they cannot be estimated "
+                        "(unidentifiable): measure them or a quantity they affect, or leave "
+                        "them out of the model")
+
+
+def warn_if_not_converged(fit, coef, x0s, rows):
+    err = fit.error(coef, x0s, rows)
+    if not np.isfinite(err):
+        warnings.warn("the fitted model's simulation diverges on the data", stacklevel=4)
+    return err
+
+
+def split_rows(records, holdout) -> tuple[list, list]:
+    """Training rows (the first part of each record) and held-out rows (the rest)."""
+    train, test = [], []
+    for r in records:
+        cut = int(round(r.m * (1 - holdout)))
+        if cut < 2 or r.m - cut < 2:
+            raise DataError(f"a record of {r.m} samples is too short to hold out its last "
+                            f"{holdout:.0%} for choosing terms; give threshold= a number or "
+                            "longer records")
+        w = np.zeros(r.m, bool)
+        w[:cut] = True
+        train.append(w)
+        test.append(~w)
+    return train, test

@@ -1,0 +1,154 @@
+"""``DiscrepancyModel.fit_outputs``: the output-error fit from data to a fitted model
+(set-up, initial states, the path of supports, the choice, the final refit)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ParameterError, ShapeError
+from .output_error import (
+    NEGLIGIBLE,
+    RIDGE,
+    OutputErrorFit,
+    check_identifiable,
+    initial_states,
+    n_states_of,
+    records_of,
+    split_rows,
+    warn_if_not_converged,
+)
+from .outputs import OutputMap
+from .shooting import ShootingModel
+
+#: simulations allowed per support on the path (the final refit may use more)
+PATH_EVALUATIONS = 50
+
+
+@dataclass
+class SupportScore:
+    """One support on the path: its terms ``(n, p)`` bool, coefficients fitted on the
+    training part, and its scaled RMS forecast error on the held-out part."""
+
+    support: np.ndarray
+    coef: np.ndarray
+    heldout_error: float
+
+    @property
+    def n_terms(self) -> int:
+        return int(self.support.sum())
+
+
+def fit_outputs(model, y, t, u, *, outputs, x0, u_hold, substeps, max_terms, holdout,
+                tolerance, progress):
+    """See :meth:`DiscrepancyModel.fit_outputs`."""
+    _check_options(max_terms, holdout, tolerance)
+    n = n_states_of(model, x0)
+    records, r = records_of(model, y, t, u, substeps, u_hold)
+    setup = model.make_setup(n, r)
+    out_map = OutputMap(outputs, setup.state_names)
+    if records[0].y.shape[1] != out_map.k:
+        raise ShapeError(f"y has {records[0].y.shape[1]} columns but outputs names "
+                         f"{out_map.k} measured quantities {out_map.names}")
+    x0s = initial_states(x0, records, out_map, n)
+    points = (x0s, None if not r else np.repeat(records[0].u[:1], len(x0s), axis=0))
+    shooting = ShootingModel(setup, substeps, check_points=points)
+    fit = OutputErrorFit(setup, records, out_map, shooting, _allowed(setup))
+    everything = [np.ones(rec.m, bool) for rec in records]
+    check_identifiable(fit, x0s, everything)
+    none = np.zeros((n, setup.n_features), bool)
+    zero = np.zeros((n, setup.n_features))
+    _, x0s, _ = fit.solve(none, zero, x0s, everything, 0.0)     # the prior's best start
+    fit.set_coef_scale(x0s)
+    threshold = getattr(setup.optimizer, "threshold", "auto")
+    if threshold == "auto":
+        path, chosen = _path(fit, x0s, max_terms, holdout, tolerance, progress)
+        support = chosen.support
+    else:
+        support, path = _thresholded(fit, x0s, float(threshold), max_terms, everything), []
+    coef, x0s, _ = fit.solve(support, zero, x0s, everything, 0.0)
+    coef[~support] = 0.0
+    error = warn_if_not_converged(fit, coef, x0s, everything)
+    return setup, coef, x0s, fit, path, error
+
+
+def _check_options(max_terms, holdout, tolerance):
+    if max_terms is not None and (not isinstance(max_terms, (int, np.integer))
+                                  or isinstance(max_terms, bool) or max_terms < 1):
+        raise ParameterError(f"max_terms must be a positive integer or None; got {max_terms!r}")
+    if not isinstance(holdout, (int, float)) or isinstance(holdout, bool) or \
+            not 0.05 <= holdout <= 0.5:
+        raise ParameterError(f"holdout must be a fraction in [0.05, 0.5]; got {holdout!r}")
+    if not isinstance(tolerance, (int, float)) or isinstance(tolerance, bool) or \
+            not 0 <= tolerance <= 1:
+        raise ParameterError(f"tolerance must be a number in [0, 1]; got {tolerance!r}")
+
+
+def _allowed(setup) -> np.ndarray:
+    """Terms each equation may use: the model's constraints (masks only), else all."""
+    constraints = getattr(setup.optimizer, "constraints", None)
+    if constraints is None:
+        return np.ones((setup.n_states, setup.n_features), bool)
+    if constraints.has_linear:
+        raise ParameterError("output-error fits honour term masks (exact_equations, only) "
+                             "but not linear equalities or inequalities")
+    return constraints.allowed.copy()
+
+
+def _first_support(fit, x0s, rows, max_terms):
+    """The full allowed library fitted (with a small ridge), cut to ``max_terms``."""
+    coef, x0s, _ = fit.solve(fit.allowed, np.zeros((fit.n, fit.p)), x0s, rows, RIDGE)
+    support = fit.allowed.copy()
+    if max_terms is not None and support.sum() > max_terms:
+        order = np.argsort(-fit.importance(coef))
+        keep = np.zeros(fit.n * fit.p, bool)
+        keep[order[:max_terms]] = True
+        support &= keep.reshape(support.shape)
+        coef, x0s, _ = fit.solve(support, coef * support, x0s, rows, RIDGE)
+    return support, coef, x0s
+
+
+def _drop_least(fit, support, coef) -> np.ndarray:
+    """The support without its least important term (and any negligible ones)."""
+    size = np.where(support.ravel(), fit.importance(coef), np.inf)
+    active = np.isfinite(size)
+    drop = size <= NEGLIGIBLE * size[active].max()
+    drop[np.argmin(size)] = True
+    return support & ~drop.reshape(support.shape)
+
+
+def _path(fit, x0s, max_terms, holdout, tolerance, progress):
+    """Supports from the full library down to none, fitted on the training part of every
+    record and scored on the held-out rest; the sparsest within ``tolerance`` of the best."""
+    from tqdm.auto import tqdm
+
+    train, test = split_rows(fit.records, holdout)
+    support, coef, x0s = _first_support(fit, x0s, train, max_terms)
+    path = []
+    bar = tqdm(total=int(support.sum()) + 1, desc="output-error path", unit="support",
+               disable=None if progress is None else not progress)
+    while True:
+        path.append(SupportScore(support.copy(), coef.copy(), fit.error(coef, x0s, test)))
+        bar.update()
+        if not support.any():
+            break
+        support = _drop_least(fit, support, coef)
+        coef, x0s, _ = fit.solve(support, coef * support, x0s, train, RIDGE,
+                                 max_evaluations=PATH_EVALUATIONS)
+    bar.close()
+    best = min(s.heldout_error for s in path)
+    chosen = min((s for s in path if s.heldout_error <= (1 + tolerance) * best),
+                 key=lambda s: s.n_terms)
+    return path, chosen
+
+
+def _thresholded(fit, x0s, threshold, max_terms, rows):
+    """Sequential thresholding on the raw coefficients: refit, drop ``|ξ| < threshold``."""
+    support, coef, x0s = _first_support(fit, x0s, rows, max_terms)
+    for _ in range(support.size):
+        keep = support & (np.abs(coef) >= threshold)
+        if np.array_equal(keep, support):
+            break
+        support = keep
+        coef, x0s, _ = fit.solve(support, coef * support, x0s, rows, RIDGE)
+    return support

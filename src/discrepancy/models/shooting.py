@@ -1,0 +1,119 @@
+"""Simulation of the hybrid model with its sensitivities, for output-error fits.
+
+The model ``ẋ = f_m(x, u) + Ξ θ(x, u)`` is discretised by RK4 with the input at its stage
+times (exactly the steps :meth:`DiscrepancyModel.simulate` takes with ``method="rk4"``),
+and CasADi differentiates one step of the discrete map symbolically; the sensitivities of
+the state to the initial state and to every coefficient ride along as extra state (forward
+sensitivities of the discrete map, exact), ``BLOCK`` steps per compiled call, so the cost
+grows linearly with the record and CasADi never builds a graph as long as the record.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .casadi_form import _casadi, library_columns, prior_expression, rk4_step, stage_columns
+
+#: steps per differentiated block
+BLOCK = 256
+
+
+@dataclass
+class Sensitivities:
+    """States ``(m, n)`` at the samples (row 0 is ``x0``) and their derivatives:
+    ``d_x0`` ``(m, n, n)`` with respect to ``x0`` and ``d_coef`` ``(m, n, n p)`` with
+    respect to the coefficients (flattened row-major: ``Ξ[i, j]`` is column ``i p + j``)."""
+
+    states: np.ndarray
+    d_x0: np.ndarray
+    d_coef: np.ndarray
+
+
+class ShootingModel:
+    """The discretised hybrid model of one set-up, with all ``n p`` coefficients free.
+
+    Args:
+        setup: a :class:`~discrepancy.models.setup.FitSetup` (names, prior, library).
+        substeps: RK4 steps per sample interval.
+        check_points: ``(states, inputs)`` on which a traced callable prior is checked.
+    """
+
+    def __init__(self, setup, substeps: int, *, check_points=None):
+        ca = _casadi()
+        n, r = setup.n_states, setup.n_inputs
+        p = setup.n_features
+        self.n, self.r, self.p, self.substeps = n, r, p, substeps
+        x, u, coef = ca.SX.sym("x", n), ca.SX.sym("u", r), ca.SX.sym("xi", n * p)
+        theta = library_columns(setup.library.feature_expressions_, setup.variable_names,
+                                x, u)
+        xi = ca.reshape(coef, p, n).T                      # row-major Ξ (n, p)
+        rhs = prior_expression(setup.prior, x, u, check_points=check_points) + \
+            ca.mtimes(xi, theta)
+        f = ca.Function("f", [x, u, coef], [rhs])
+        self.library_function = ca.Function("theta", [x, u], [theta])
+        step = rk4_step(f, n, r, substeps, n_parameters=n * p)
+        self._plain = step.mapaccum("plain", BLOCK)
+        self._augmented = _sensitivity_step(step, n, n * p).mapaccum("sensitive", BLOCK)
+
+    def _blocks(self, stages, h):
+        """Padded stage columns and step lengths, ``BLOCK`` steps at a time (steps of
+        length 0 change nothing)."""
+        k = len(h)
+        padded = max(1, -(-k // BLOCK)) * BLOCK
+        cols = np.zeros((self.r * (2 * self.substeps + 1), padded))
+        if self.r:
+            cols[:, :k] = stage_columns(stages)
+        lengths = np.zeros((1, padded))
+        lengths[0, :k] = h
+        for i in range(0, padded, BLOCK):
+            yield i, cols[:, i:i + BLOCK], lengths[:, i:i + BLOCK]
+
+    def _run(self, function, start, stages, h, coef) -> np.ndarray:
+        """The accumulated state of ``function`` at every sample ``(len(h) + 1, width)``."""
+        k, c = len(h), np.asarray(coef, dtype=float).ravel()
+        out = np.empty((k + 1 + BLOCK, len(start)))
+        out[0] = state = start
+        for i, cols, lengths in self._blocks(stages, h):
+            block = np.asarray(function(state, cols, lengths, c))
+            out[i + 1:i + 1 + BLOCK] = block.T
+            state = block[:, -1]
+        return out[:k + 1]
+
+    def simulate(self, x0, stages, h, coef) -> np.ndarray:
+        """States ``(len(h) + 1, n)`` from ``x0`` with coefficients ``coef`` ``(n, p)``."""
+        return self._run(self._plain, np.asarray(x0, dtype=float), stages, h, coef)
+
+    def sensitivities(self, x0, stages, h, coef) -> Sensitivities:
+        """States and their derivatives (see :class:`Sensitivities`)."""
+        n, npar = self.n, self.n * self.p
+        start = np.concatenate([np.asarray(x0, dtype=float), np.eye(n).ravel(order="F"),
+                                np.zeros(n * npar)])
+        out = self._run(self._augmented, start, stages, h, coef)
+        m = len(out)
+        d_x0 = out[:, n:n + n * n].reshape(m, n, n, order="F")
+        d_coef = out[:, n + n * n:].reshape(m, n, npar, order="F")
+        return Sensitivities(out[:, :n], d_x0, d_coef)
+
+    def theta(self, states, inputs) -> np.ndarray:
+        """Library columns ``(m, p)`` along a trajectory (for scaling the coefficients)."""
+        u = np.zeros((len(states), 0)) if inputs is None else inputs
+        return np.asarray(self.library_function.map(len(states))(states.T, u.T)).T
+
+
+def _sensitivity_step(step, n: int, n_parameters: int):
+    """One step of the state and its forward sensitivities, as one augmented state
+    ``[x, vec(S_x0), vec(S_coef)]`` (column-major): ``S' = A S (+ B)`` with ``A = ∂step/∂x``
+    and ``B = ∂step/∂coef``, differentiated symbolically once for the step."""
+    ca = _casadi()
+    width = n + n * n + n * n_parameters
+    z = ca.SX.sym("z", width)
+    cols = ca.SX.sym("U", step.size1_in(1))
+    h, c = ca.SX.sym("h"), ca.SX.sym("c", n_parameters)
+    x = z[:n]
+    s_x = ca.reshape(z[n:n + n * n], n, n)
+    s_c = ca.reshape(z[n + n * n:], n, n_parameters)
+    nxt = step(x, cols, h, c)
+    a, b = ca.jacobian(nxt, x), ca.jacobian(nxt, c)
+    out = ca.vertcat(nxt, ca.vec(ca.mtimes(a, s_x)), ca.vec(ca.mtimes(a, s_c) + b))
+    return ca.Function("sensitive_step", [z, cols, h, c], [out])
