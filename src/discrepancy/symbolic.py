@@ -332,6 +332,8 @@ class _NamePrinter(sp.printing.str.StrPrinter):
 
     def _print_Pow(self, expr):
         base, ex = expr.args
+        if ex == sp.S.Half:
+            return f"sqrt({self._print(base)})"
         b = self._print(base)
         if not (base.is_Symbol or base.is_Function):
             b = f"({b})"

@@ -142,7 +142,7 @@ class DiscrepancyModel(Estimator):
         out = [method(tr.x, tr.t)[1] for tr in trajectories]
         return out if isinstance(x, (list, tuple)) else out[0]
 
-    def fit_outputs(self, y, t=None, *args, u=None, outputs=None, x0=None,
+    def fit_outputs(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
                     u_hold: str = "linear", substeps: int = 4, max_terms: int | None = None,
                     holdout: float = 0.25, tolerance: float = 0.05,
                     progress: bool | None = None) -> DiscrepancyModel:
@@ -160,7 +160,8 @@ class DiscrepancyModel(Estimator):
                 ``x0``.
             x0: a guess of the initial state ``(n,)`` (or one per trajectory); by default
                 measured states start at their first sample and the others at 0. Every
-                initial state is estimated.
+                initial state is estimated, within ``x0_bounds`` = ``(lower, upper)``
+                (numbers or one per state) when given (e.g. levels that cannot be negative).
             u_hold: the input between samples (``"linear"``, ``"zoh"``, ``"bandlimited"``).
             substeps: RK4 steps per sample interval.
             max_terms: the most terms the fit may start from (the most important are kept).
@@ -178,7 +179,8 @@ class DiscrepancyModel(Estimator):
 
         self._validate_params()
         setup, coef, x0s, fit, path, error = fit_outputs(
-            self, y, t, u, outputs=outputs, x0=x0, u_hold=u_hold, substeps=substeps,
+            self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
+            substeps=substeps,
             max_terms=max_terms, holdout=holdout, tolerance=tolerance, progress=progress)
         self._set_fit(setup, coef, None, None)
         self.x0_ = x0s if isinstance(y, (list, tuple)) else x0s[0]

@@ -53,6 +53,7 @@ class OutputErrorFit:
         self.y_scale = np.where(spread > 0, spread, np.maximum(np.abs(y).max(axis=0), 1.0))
         self.n, self.p = setup.n_states, setup.n_features
         self.coef_scale = np.ones(self.n * self.p)      # set from the data by set_coef_scale
+        self.bounds = (np.full(self.n, -np.inf), np.full(self.n, np.inf))   # of x0
 
     # ---------------------------------------------------------------- residuals
     def _parts(self, theta, support):
@@ -106,11 +107,17 @@ class OutputErrorFit:
         ``max_evaluations`` bounds the simulations (supports on the path that fit badly
         need not converge far to be seen to be bad)."""
         index = np.flatnonzero(support.ravel())
-        theta0 = np.concatenate([coef.ravel()[index] / self.coef_scale[index], x0s.ravel()])
+        lower = np.concatenate([np.full(len(index), -np.inf),
+                                np.tile(self.bounds[0], len(self.records))])
+        upper = np.concatenate([np.full(len(index), np.inf),
+                                np.tile(self.bounds[1], len(self.records))])
+        theta0 = np.clip(np.concatenate([coef.ravel()[index] / self.coef_scale[index],
+                                         x0s.ravel()]), lower, upper)
         result = scipy.optimize.least_squares(
             lambda th: self.residuals(th, support, rows, ridge, jacobian=False), theta0,
             jac=lambda th: self.residuals(th, support, rows, ridge)[1], method="trf",
-            x_scale="jac", max_nfev=max_evaluations, xtol=1e-9, ftol=1e-9, gtol=1e-9)
+            bounds=(lower, upper), x_scale="jac", max_nfev=max_evaluations, xtol=1e-9,
+            ftol=1e-9, gtol=1e-9)
         _, flat, x0s = self._parts(result.x, support)
         return flat.reshape(self.n, self.p), x0s, float(2 * result.cost)
 
@@ -174,20 +181,23 @@ def initial_states(x0, records, out_map, n) -> np.ndarray:
     return np.repeat(x0s, len(records), axis=0) if len(x0s) == 1 else x0s
 
 
-def check_identifiable(fit, x0s, rows):
-    """Every state must move some output: a hidden state whose initial value changes no
-    output over the record cannot be estimated."""
-    support = np.zeros((fit.n, fit.p), bool)
-    theta = x0s.ravel()
-    _, J = fit.residuals(theta, support, rows, 0.0)
-    influence = np.linalg.norm(J.reshape(J.shape[0], -1, fit.n), axis=(0, 1))
-    dead = np.flatnonzero(influence <= 1e-9 * max(float(influence.max()), 1e-300))
-    if dead.size:
-        names = [fit.setup.state_names[i] for i in dead]
-        raise DataError(f"state(s) {names} do not influence the measured outputs "
-                        f"{fit.out_map.names} over the record, so they cannot be estimated "
-                        "(unidentifiable): measure them or a quantity they affect, or leave "
-                        "them out of the model")
+def check_identifiable(fit):
+    """Every state must be able to move a measured output, through the prior or an allowed
+    term (a chain of dependencies in the model's structure); one that cannot is
+    unidentifiable and is refused by name."""
+    influences = fit.shooting.influences(fit.allowed)
+    reached = set(fit.out_map.measured)
+    grew = True
+    while grew:
+        new = {i for j in reached for i in np.flatnonzero(influences[j])} - reached
+        reached |= new
+        grew = bool(new)
+    dead = [name for i, name in enumerate(fit.setup.state_names) if i not in reached]
+    if dead:
+        raise DataError(f"state(s) {dead} cannot influence the measured outputs "
+                        f"{fit.out_map.names} through the prior or any allowed term, so they "
+                        "cannot be estimated (unidentifiable): measure them or a quantity "
+                        "they affect, or leave them out of the model")
 
 
 def warn_if_not_converged(fit, coef, x0s, rows):
@@ -211,3 +221,19 @@ def split_rows(records, holdout) -> tuple[list, list]:
         train.append(w)
         test.append(~w)
     return train, test
+
+
+def x0_bounds(bounds, n):
+    """``(lower (n,), upper (n,))`` from ``None`` or a pair of numbers or sequences."""
+    if bounds is None:
+        return np.full(n, -np.inf), np.full(n, np.inf)
+    try:
+        lower, upper = (np.broadcast_to(np.asarray(b, dtype=float), (n,)).copy()
+                        for b in bounds)
+    except (TypeError, ValueError):
+        raise ParameterError(f"x0_bounds must be (lower, upper), each a number or {n} "
+                             f"numbers; got {bounds!r:.80}") from None
+    if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower >= upper):
+        raise ParameterError(f"x0_bounds must have lower < upper for every state; got "
+                             f"{lower} and {upper}")
+    return lower, upper

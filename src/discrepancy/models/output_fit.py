@@ -18,11 +18,12 @@ from .output_error import (
     split_rows,
     warn_if_not_converged,
 )
+from .output_error import x0_bounds as bounds_of
 from .outputs import OutputMap
 from .shooting import ShootingModel
 
 #: simulations allowed per support on the path (the final refit may use more)
-PATH_EVALUATIONS = 50
+PATH_EVALUATIONS = 200
 
 
 @dataclass
@@ -39,8 +40,8 @@ class SupportScore:
         return int(self.support.sum())
 
 
-def fit_outputs(model, y, t, u, *, outputs, x0, u_hold, substeps, max_terms, holdout,
-                tolerance, progress):
+def fit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, max_terms,
+                holdout, tolerance, progress):
     """See :meth:`DiscrepancyModel.fit_outputs`."""
     _check_options(max_terms, holdout, tolerance)
     n = n_states_of(model, x0)
@@ -54,8 +55,9 @@ def fit_outputs(model, y, t, u, *, outputs, x0, u_hold, substeps, max_terms, hol
     points = (x0s, None if not r else np.repeat(records[0].u[:1], len(x0s), axis=0))
     shooting = ShootingModel(setup, substeps, check_points=points)
     fit = OutputErrorFit(setup, records, out_map, shooting, _allowed(setup))
+    fit.bounds = bounds_of(x0_bounds, n)
     everything = [np.ones(rec.m, bool) for rec in records]
-    check_identifiable(fit, x0s, everything)
+    check_identifiable(fit)
     none = np.zeros((n, setup.n_features), bool)
     zero = np.zeros((n, setup.n_features))
     _, x0s, _ = fit.solve(none, zero, x0s, everything, 0.0)     # the prior's best start
@@ -63,10 +65,11 @@ def fit_outputs(model, y, t, u, *, outputs, x0, u_hold, substeps, max_terms, hol
     threshold = getattr(setup.optimizer, "threshold", "auto")
     if threshold == "auto":
         path, chosen = _path(fit, x0s, max_terms, holdout, tolerance, progress)
-        support = chosen.support
+        support, coef = chosen.support, chosen.coef
     else:
-        support, path = _thresholded(fit, x0s, float(threshold), max_terms, everything), []
-    coef, x0s, _ = fit.solve(support, zero, x0s, everything, 0.0)
+        (support, coef), path = _thresholded(fit, x0s, float(threshold), max_terms,
+                                             everything), []
+    coef, x0s, _ = fit.solve(support, coef * support, x0s, everything, 0.0)
     coef[~support] = 0.0
     error = warn_if_not_converged(fit, coef, x0s, everything)
     return setup, coef, x0s, fit, path, error
@@ -151,4 +154,4 @@ def _thresholded(fit, x0s, threshold, max_terms, rows):
             break
         support = keep
         coef, x0s, _ = fit.solve(support, coef * support, x0s, rows, RIDGE)
-    return support
+    return support, coef

@@ -9,7 +9,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ParameterError, ShapeError, UnknownNameError
-from ..symbolic import adopt, compile_numpy, symbol
+from ..symbolic import adopt, compile_numpy, symbol, to_casadi
 
 
 class OutputMap:
@@ -48,8 +48,18 @@ class OutputMap:
         self.k = len(self.expressions)
         self.selected = np.array(selected) if len(selected) == self.k else None
         self._values = [compile_numpy(e, names) for e in self.expressions]
-        self._gradients = [[compile_numpy(sp.diff(e, symbol(s)), names)
-                            for s in names] for e in self.expressions]
+        self._jacobian = None if self.selected is not None else self._casadi_jacobian()
+
+    def _casadi_jacobian(self):
+        """``dh/dx`` by CasADi (exact through saturations such as ``Min``)."""
+        from .casadi_form import _casadi
+
+        ca = _casadi()
+        x = ca.SX.sym("x", self.n)
+        symbols = {name: x[i] for i, name in enumerate(self.state_names)}
+        h = ca.vertcat(*[ca.SX(to_casadi(e, symbols, term=f"outputs[{i}]"))
+                         for i, e in enumerate(self.expressions)])
+        return ca.Function("dh", [x], [ca.jacobian(h, x)])
 
     def __call__(self, states: np.ndarray) -> np.ndarray:
         if self.selected is not None:
@@ -62,8 +72,8 @@ class OutputMap:
             out = np.zeros((m, self.k, self.n))
             out[:, np.arange(self.k), self.selected] = 1.0
             return out
-        return np.stack([np.column_stack([g(states) for g in row])
-                         for row in self._gradients], axis=1)
+        flat = np.asarray(self._jacobian.map(m)(states.T))    # (k, m n): sample j's block
+        return flat.reshape(self.k, m, self.n).transpose(1, 0, 2)
 
     def initial_guess(self, y0: np.ndarray) -> np.ndarray:
         """``x0`` guess: measured states from the first outputs, the others zero."""

@@ -52,6 +52,9 @@ class ShootingModel:
             ca.mtimes(xi, theta)
         f = ca.Function("f", [x, u, coef], [rhs])
         self.library_function = ca.Function("theta", [x, u], [theta])
+        prior = rhs - ca.mtimes(xi, theta)
+        self._prior_uses = _uses(ca.jacobian(prior, x))       # (n, n): f_m,j uses x_i
+        self._term_uses = _uses(ca.jacobian(theta, x))        # (p, n): θ_k uses x_i
         step = rk4_step(f, n, r, substeps, n_parameters=n * p)
         self._plain = step.mapaccum("plain", BLOCK)
         self._augmented = _sensitivity_step(step, n, n * p).mapaccum("sensitive", BLOCK)
@@ -95,6 +98,11 @@ class ShootingModel:
         d_coef = out[:, n + n * n:].reshape(m, n, npar, order="F")
         return Sensitivities(out[:, :n], d_x0, d_coef)
 
+    def influences(self, allowed: np.ndarray) -> np.ndarray:
+        """``(n, n)`` bool: ``[j, i]`` when the equation of state ``j`` can depend on state
+        ``i`` through the prior or a term ``allowed`` ``(n, p)`` in that equation."""
+        return self._prior_uses | (allowed.astype(int) @ self._term_uses.astype(int) > 0)
+
     def theta(self, states, inputs) -> np.ndarray:
         """Library columns ``(m, p)`` along a trajectory (for scaling the coefficients)."""
         u = np.zeros((len(states), 0)) if inputs is None else inputs
@@ -117,3 +125,12 @@ def _sensitivity_step(step, n: int, n_parameters: int):
     a, b = ca.jacobian(nxt, x), ca.jacobian(nxt, c)
     out = ca.vertcat(nxt, ca.vec(ca.mtimes(a, s_x)), ca.vec(ca.mtimes(a, s_c) + b))
     return ca.Function("sensitive_step", [z, cols, h, c], [out])
+
+
+def _uses(jacobian) -> np.ndarray:
+    """Structural nonzeros of a CasADi Jacobian as a bool array."""
+    pattern = jacobian.sparsity()
+    out = np.zeros(pattern.shape, bool)
+    rows, cols = pattern.get_triplet()
+    out[rows, cols] = True
+    return out
