@@ -14,6 +14,8 @@ from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..symbolic import compile_numpy, feature_name
+from .arguments import keywords_only
+from .output_methods import OutputErrorMethods
 from .setup import FitSetup, resolve_setup
 from .simulation import integrate
 from .term_constraints import Constraints
@@ -24,19 +26,7 @@ _NAMES = [None, InstanceOf(str, "a name"),
                     "a list of names")]
 
 
-def keywords_only(method: str, extra: tuple, names: str) -> None:
-    """Refuse positional arguments after ``t`` (PySINDy orders them differently, so a
-    positional call would silently mean something else)."""
-    if extra:
-        first = "x0" if method.startswith("simulate") else "x"
-        why = (" PySINDy's order is fit(x, t, x_dot, u), so a positional x_dot would "
-               "otherwise be taken as u") if "x_dot" in names else ""
-        raise ParameterError(f"{method}: arguments after t ({names}) must be passed by name, "
-                             f"e.g. {method}({first}, t, u=u); got {len(extra)} more "
-                             f"positional argument(s).{why}")
-
-
-class DiscrepancyModel(Estimator):
+class DiscrepancyModel(OutputErrorMethods, Estimator):
     """Hybrid model ``dx/dt = f_m(x, u) + g(x, u)`` with a sparse discrepancy ``g = Θ(x, u) Ξ``.
 
     Args:
@@ -141,52 +131,6 @@ class DiscrepancyModel(Estimator):
         method = self.make_setup(n, 0, sample=trajectories).differentiation
         out = [method(tr.x, tr.t)[1] for tr in trajectories]
         return out if isinstance(x, (list, tuple)) else out[0]
-
-    def fit_outputs(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
-                    u_hold: str = "linear", substeps: int = 4, max_terms: int | None = None,
-                    holdout: float = 0.25, tolerance: float = 0.05,
-                    progress: bool | None = None) -> DiscrepancyModel:
-        """Learn the discrepancy from measured outputs when some states are not measured
-        (output error: the simulation of ``f_m + g`` from estimated initial states, with the
-        measured input, is fitted to the recorded outputs). Needs CasADi (``[control]``).
-
-        Args:
-            y: recorded outputs ``(m, k)`` (1-D for one), or a list per trajectory.
-            t: time step or times ``(m,)`` (a list per trajectory).
-            u: inputs ``(m, r)`` or a list per trajectory.
-            outputs: what each column of ``y`` measures: a state (name or index) or a
-                sympy expression in the state names (``sp.Min(h2, 10)`` for a saturating
-                sensor). The model's states come from ``state_names``, a sympy prior or
-                ``x0``.
-            x0: a guess of the initial state ``(n,)`` (or one per trajectory); by default
-                measured states start at their first sample and the others at 0. Every
-                initial state is estimated, within ``x0_bounds`` = ``(lower, upper)``
-                (numbers or one per state) when given (e.g. levels that cannot be negative).
-            u_hold: the input between samples (``"linear"``, ``"zoh"``, ``"bandlimited"``).
-            substeps: RK4 steps per sample interval.
-            max_terms: the most terms the fit may start from (the most important are kept).
-            holdout, tolerance: with the optimizer's ``threshold="auto"`` (the default),
-                supports are compared by forecasting the last ``holdout`` of every record
-                after fitting the rest; the sparsest within ``tolerance`` (relative) of the
-                best is refitted on everything. A numeric threshold drops coefficients below
-                it instead. Term masks of ``constraints`` are honoured.
-
-        After the fit, ``x0_`` holds the estimated initial states, ``output_selection_``
-        the scored supports and ``output_error_`` the scaled RMS output error of the fit.
-        """
-        keywords_only("fit_outputs", args, "u, outputs and the options")
-        from .output_fit import fit_outputs
-
-        self._validate_params()
-        setup, coef, x0s, fit, path, error = fit_outputs(
-            self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
-            substeps=substeps,
-            max_terms=max_terms, holdout=holdout, tolerance=tolerance, progress=progress)
-        self._set_fit(setup, coef, None, None)
-        self.x0_ = x0s if isinstance(y, (list, tuple)) else x0s[0]
-        self.output_selection_, self.output_error_ = path, error
-        self.output_names_ = list(fit.out_map.names)
-        return self
 
     def make_setup(self, n_states: int, n_inputs: int, *, sample=None) -> FitSetup:
         """The frozen set-up (names, prior, library, optimizer, differentiation) of this

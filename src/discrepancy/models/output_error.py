@@ -29,6 +29,8 @@ from .inputs import check_hold, stage_inputs
 RIDGE = 1e-6
 #: terms whose scaled size is below this share of the largest are dropped together
 NEGLIGIBLE = 1e-3
+#: contiguous blocks per record for the standard error of a held-out score
+SCORE_BLOCKS = 8
 
 
 class _Record:
@@ -54,11 +56,12 @@ class OutputErrorFit:
         self.n, self.p = setup.n_states, setup.n_features
         self.coef_scale = np.ones(self.n * self.p)      # set from the data by set_coef_scale
         self.bounds = (np.full(self.n, -np.inf), np.full(self.n, np.inf))   # of x0
+        self.fixed = np.zeros((self.n, self.p))   # coefficients outside the fitted support
 
     # ---------------------------------------------------------------- residuals
     def _parts(self, theta, support):
         index = np.flatnonzero(support.ravel())
-        coef = np.zeros(self.n * self.p)
+        coef = self.fixed.ravel().copy()
         coef[index] = theta[:len(index)] * self.coef_scale[index]
         x0s = theta[len(index):].reshape(len(self.records), self.n)
         return index, coef, x0s
@@ -128,19 +131,29 @@ class OutputErrorFit:
 
     def error(self, coef, x0s, rows) -> float:
         """RMS of the scaled output error on the given rows of every record."""
+        return float(np.sqrt(self.squared_errors(coef, x0s, rows)[0]))
+
+    def squared_errors(self, coef, x0s, rows, blocks: int = SCORE_BLOCKS):
+        """Mean squared scaled output error on ``rows`` and its standard error, estimated
+        from the means of ``blocks`` contiguous blocks of each record's rows (the errors of a
+        simulation are correlated in time, so samples are not independent)."""
         sims = self.simulate_outputs(coef, x0s)
-        errs = [((s - r.y) / self.y_scale)[w] for s, r, w in zip(sims, self.records, rows,
-                                                                   strict=True)]
-        e = np.concatenate([a.ravel() for a in errs])
-        return float(np.sqrt(np.mean(e ** 2))) if np.all(np.isfinite(e)) else np.inf
+        means = []
+        for sim, record, w in zip(sims, self.records, rows, strict=True):
+            e2 = np.mean(((sim - record.y) / self.y_scale)[w] ** 2, axis=1)
+            if not np.all(np.isfinite(e2)):
+                return np.inf, np.inf
+            means.extend(block.mean() for block in np.array_split(e2, min(blocks, len(e2))))
+        means = np.array(means)
+        return float(means.mean()), float(means.std(ddof=1) / np.sqrt(len(means)))
 
     def set_coef_scale(self, x0s):
         """Scale of each coefficient: its equation's derivative scale over its column's RMS
-        along the prior's simulation, so that scaled sizes compare across terms."""
+        along the simulation of the fixed part (the prior, or the model being refitted), so
+        that scaled sizes compare across terms."""
         theta_rms, dx_rms = [], []
-        zero = np.zeros((self.n, self.p))
         for x0, r in zip(x0s, self.records, strict=True):
-            states = self.shooting.simulate(x0, r.stages, r.h, zero)
+            states = self.shooting.simulate(x0, r.stages, r.h, self.fixed)
             theta_rms.append(np.mean(self.shooting.theta(states, r.u) ** 2, axis=0))
             dx_rms.append(np.mean((np.diff(states, axis=0) / r.h[:, None]) ** 2, axis=0))
         theta = np.sqrt(np.mean(theta_rms, axis=0))
@@ -148,6 +161,22 @@ class OutputErrorFit:
         dx = np.where(dx > 0, dx, max(float(dx.max()), 1.0))
         theta = np.where(theta > 0, theta, 1.0)
         self.coef_scale = (dx[:, None] / theta[None, :]).ravel()
+
+    def compensated(self, coef, dropped, x0s) -> np.ndarray:
+        """A start for the support without the ``dropped`` terms: the remaining terms of each
+        equation absorb, by least squares along the current simulated trajectories, what the
+        dropped ones contributed, so the model's derivatives (and its simulation) barely
+        move; refitting from there does not have to find its way back from a divergence."""
+        thetas = [self.shooting.theta(self.shooting.simulate(x0, r.stages, r.h, coef), r.u)
+                  for x0, r in zip(x0s, self.records, strict=True)]
+        theta = np.vstack(thetas)
+        out = np.where(dropped, 0.0, coef)
+        for i in np.flatnonzero(dropped.any(axis=1)):
+            keep = np.flatnonzero(out[i] != 0)
+            lost = theta[:, dropped[i]] @ coef[i, dropped[i]]
+            if keep.size and np.all(np.isfinite(theta[:, keep])) and np.all(np.isfinite(lost)):
+                out[i, keep] += np.linalg.lstsq(theta[:, keep], lost, rcond=None)[0]
+        return out
 
     def importance(self, coef) -> np.ndarray:
         return np.abs(coef.ravel()) / self.coef_scale

@@ -29,15 +29,40 @@ PATH_EVALUATIONS = 200
 @dataclass
 class SupportScore:
     """One support on the path: its terms ``(n, p)`` bool, coefficients fitted on the
-    training part, and its scaled RMS forecast error on the held-out part."""
+    training part, the mean squared scaled forecast error on the held-out part and the
+    standard error of that mean."""
 
     support: np.ndarray
     coef: np.ndarray
-    heldout_error: float
+    heldout_mse: float
+    heldout_se: float
 
     @property
     def n_terms(self) -> int:
         return int(self.support.sum())
+
+    @property
+    def heldout_error(self) -> float:
+        """RMS scaled forecast error on the held-out part."""
+        return float(np.sqrt(self.heldout_mse))
+
+
+def prepare(setup, records, *, outputs, x0, x0_bounds, substeps):
+    """The fit's pieces for ``setup`` and the records: ``(fit, x0s, all rows of each)``."""
+    r = 0 if records[0].u is None else records[0].u.shape[1]
+    if r != setup.n_inputs:
+        raise ShapeError(f"u has {r} input columns; the model has {setup.n_inputs}")
+    out_map = OutputMap(outputs, setup.state_names)
+    if records[0].y.shape[1] != out_map.k:
+        raise ShapeError(f"y has {records[0].y.shape[1]} columns but outputs names "
+                         f"{out_map.k} measured quantities {out_map.names}")
+    x0s = initial_states(x0, records, out_map, setup.n_states)
+    points = (x0s, None if not r else np.repeat(records[0].u[:1], len(x0s), axis=0))
+    shooting = ShootingModel(setup, substeps, check_points=points)
+    fit = OutputErrorFit(setup, records, out_map, shooting, _allowed(setup))
+    fit.bounds = bounds_of(x0_bounds, setup.n_states)
+    check_identifiable(fit)
+    return fit, x0s, [np.ones(rec.m, bool) for rec in records]
 
 
 def fit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, max_terms,
@@ -47,17 +72,8 @@ def fit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, max
     n = n_states_of(model, x0)
     records, r = records_of(model, y, t, u, substeps, u_hold)
     setup = model.make_setup(n, r)
-    out_map = OutputMap(outputs, setup.state_names)
-    if records[0].y.shape[1] != out_map.k:
-        raise ShapeError(f"y has {records[0].y.shape[1]} columns but outputs names "
-                         f"{out_map.k} measured quantities {out_map.names}")
-    x0s = initial_states(x0, records, out_map, n)
-    points = (x0s, None if not r else np.repeat(records[0].u[:1], len(x0s), axis=0))
-    shooting = ShootingModel(setup, substeps, check_points=points)
-    fit = OutputErrorFit(setup, records, out_map, shooting, _allowed(setup))
-    fit.bounds = bounds_of(x0_bounds, n)
-    everything = [np.ones(rec.m, bool) for rec in records]
-    check_identifiable(fit)
+    fit, x0s, everything = prepare(setup, records, outputs=outputs, x0=x0,
+                                   x0_bounds=x0_bounds, substeps=substeps)
     none = np.zeros((n, setup.n_features), bool)
     zero = np.zeros((n, setup.n_features))
     _, x0s, _ = fit.solve(none, zero, x0s, everything, 0.0)     # the prior's best start
@@ -82,9 +98,10 @@ def _check_options(max_terms, holdout, tolerance):
     if not isinstance(holdout, (int, float)) or isinstance(holdout, bool) or \
             not 0.05 <= holdout <= 0.5:
         raise ParameterError(f"holdout must be a fraction in [0.05, 0.5]; got {holdout!r}")
-    if not isinstance(tolerance, (int, float)) or isinstance(tolerance, bool) or \
-            not 0 <= tolerance <= 1:
-        raise ParameterError(f"tolerance must be a number in [0, 1]; got {tolerance!r}")
+    if tolerance is not None and (not isinstance(tolerance, (int, float))
+                                  or isinstance(tolerance, bool) or not 0 <= tolerance <= 1):
+        raise ParameterError(f"tolerance must be None (one standard error) or a number in "
+                             f"[0, 1]; got {tolerance!r}")
 
 
 def _allowed(setup) -> np.ndarray:
@@ -122,27 +139,44 @@ def _drop_least(fit, support, coef) -> np.ndarray:
 
 def _path(fit, x0s, max_terms, holdout, tolerance, progress):
     """Supports from the full library down to none, fitted on the training part of every
-    record and scored on the held-out rest; the sparsest within ``tolerance`` of the best."""
+    record and scored on the held-out rest; the choice by :func:`choose`."""
     from tqdm.auto import tqdm
 
     train, test = split_rows(fit.records, holdout)
+    zero = np.zeros((fit.n, fit.p))
+    prior_x0s = x0s
+    _, _, prior_cost = fit.solve(zero.astype(bool), zero, x0s, train, 0.0)
     support, coef, x0s = _first_support(fit, x0s, train, max_terms)
     path = []
     bar = tqdm(total=int(support.sum()) + 1, desc="output-error path", unit="support",
                disable=None if progress is None else not progress)
     while True:
-        path.append(SupportScore(support.copy(), coef.copy(), fit.error(coef, x0s, test)))
+        path.append(SupportScore(support.copy(), coef.copy(),
+                                 *fit.squared_errors(coef, x0s, test)))
         bar.update()
         if not support.any():
             break
-        support = _drop_least(fit, support, coef)
-        coef, x0s, _ = fit.solve(support, coef * support, x0s, train, RIDGE,
-                                 max_evaluations=PATH_EVALUATIONS)
+        smaller = _drop_least(fit, support, coef)
+        start = fit.compensated(coef, support & ~smaller, x0s)
+        support = smaller
+        coef, x0s, cost = fit.solve(support, start, x0s, train, RIDGE,
+                                    max_evaluations=PATH_EVALUATIONS)
+        if not cost <= prior_cost:   # lost on the way: start again from the prior alone
+            coef, x0s, _ = fit.solve(support, zero, prior_x0s, train, RIDGE,
+                                     max_evaluations=PATH_EVALUATIONS)
     bar.close()
-    best = min(s.heldout_error for s in path)
-    chosen = min((s for s in path if s.heldout_error <= (1 + tolerance) * best),
-                 key=lambda s: s.n_terms)
-    return path, chosen
+    return path, choose(path, tolerance)
+
+
+def choose(path, tolerance):
+    """The sparsest support whose held-out error is within one standard error of the best
+    (``tolerance=None``), or within ``tolerance`` (relative, of the RMS) of it."""
+    best = min(path, key=lambda s: s.heldout_mse)
+    if tolerance is None:
+        bar = best.heldout_mse + best.heldout_se
+        return min((s for s in path if s.heldout_mse <= bar), key=lambda s: s.n_terms)
+    bar = (1 + tolerance) * best.heldout_error
+    return min((s for s in path if s.heldout_error <= bar), key=lambda s: s.n_terms)
 
 
 def _thresholded(fit, x0s, threshold, max_terms, rows):
@@ -155,3 +189,17 @@ def _thresholded(fit, x0s, threshold, max_terms, rows):
         support = keep
         coef, x0s, _ = fit.solve(support, coef * support, x0s, rows, RIDGE)
     return support, coef
+
+
+def refit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, coefficients):
+    """Output error of a fitted model on new data with its support kept: the nonzero
+    coefficients refitted (``coefficients=True``) or all held (only initial states).
+    Returns ``(coef, x0s, fit)``."""
+    records, _ = records_of(model, y, t, u, substeps, u_hold)
+    fit, x0s, everything = prepare(model.setup_, records, outputs=outputs, x0=x0,
+                                   x0_bounds=x0_bounds, substeps=substeps)
+    fit.fixed = model.coef_.copy()
+    support = (model.coef_ != 0) if coefficients else np.zeros_like(model.coef_, bool)
+    fit.set_coef_scale(x0s)
+    coef, x0s, _ = fit.solve(support, model.coef_, x0s, everything, 0.0)
+    return coef, x0s, fit

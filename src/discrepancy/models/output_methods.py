@@ -1,0 +1,105 @@
+"""The model's output-error methods: fitting, refining and starting from measured outputs
+when some states are not measured (see :mod:`discrepancy.models.output_error`)."""
+from __future__ import annotations
+
+import numpy as np
+
+from .arguments import keywords_only
+
+_COMMON = """
+            y: recorded outputs ``(m, k)`` (1-D for one), or a list per trajectory.
+            t: time step or times ``(m,)`` (a list per trajectory).
+            u: inputs ``(m, r)`` or a list per trajectory.
+            outputs: what each column of ``y`` measures: a state (name or index) or a
+                sympy expression in the state names (``sp.Min(h2, 10)`` for a saturating
+                sensor).
+            x0: a guess of the initial state ``(n,)`` (or one per trajectory); by default
+                measured states start at their first sample and the others at 0. Every
+                initial state is estimated, within ``x0_bounds`` = ``(lower, upper)``
+                (numbers or one per state) when given (e.g. levels that cannot be negative).
+            u_hold: the input between samples (``"linear"``, ``"zoh"``, ``"bandlimited"``).
+            substeps: RK4 steps per sample interval (simulate the result with the same
+                ``method="rk4"``, ``substeps`` and ``u_hold``)."""
+
+
+class OutputErrorMethods:
+    """Mixed into :class:`~discrepancy.models.DiscrepancyModel`."""
+
+    def fit_outputs(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
+                    u_hold: str = "linear", substeps: int = 4, max_terms: int | None = None,
+                    holdout: float = 0.25, tolerance: float | None = None,
+                    progress: bool | None = None):
+        """Learn the discrepancy from measured outputs when some states are not measured
+        (output error: the simulation of ``f_m + g`` from estimated initial states, with the
+        measured input, is fitted to the recorded outputs). Needs CasADi (``[control]``).
+
+        Args:{common}
+            max_terms: the most terms the fit may start from (the most important are kept).
+            holdout, tolerance: with the optimizer's ``threshold="auto"`` (the default),
+                supports are compared by forecasting the last ``holdout`` of every record
+                after fitting the rest; the sparsest within one standard error of the best
+                (or within ``tolerance``, relative) is refitted on everything. A numeric
+                threshold drops coefficients below it instead. Term masks of
+                ``constraints`` are honoured. The model's states come from
+                ``state_names``, a sympy prior or ``x0``.
+
+        After the fit, ``x0_`` holds the estimated initial states, ``output_selection_``
+        the scored supports and ``output_error_`` the scaled RMS output error of the fit.
+        """
+        keywords_only("fit_outputs", args, "u, outputs and the options")
+        from .output_fit import fit_outputs
+
+        self._validate_params()
+        setup, coef, x0s, fit, path, error = fit_outputs(
+            self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
+            substeps=substeps, max_terms=max_terms, holdout=holdout, tolerance=tolerance,
+            progress=progress)
+        self._set_fit(setup, coef, None, None)
+        self._keep_outputs(y, x0s, fit, error)
+        self.output_selection_ = path
+        return self
+
+    def refine(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
+               u_hold: str = "linear", substeps: int = 4):
+        """Refit the nonzero coefficients of a fitted model (and the initial states) by
+        output error on measured outputs, keeping its terms: e.g. after a derivative-based
+        fit whose derivatives were noisy or whose velocities were estimated.
+
+        Args:{common}
+        """
+        keywords_only("refine", args, "u, outputs and the options")
+        self.check_is_fitted()
+        from .output_fit import refit_outputs
+
+        coef, x0s, fit = refit_outputs(self, y, t, u, outputs=outputs, x0=x0,
+                                       x0_bounds=x0_bounds, u_hold=u_hold,
+                                       substeps=substeps, coefficients=True)
+        self._set_fit(self.setup_, coef, self.optimizer_, self.statistics_)
+        self._keep_outputs(y, x0s, fit, fit.error(coef, x0s, [np.ones(r.m, bool)
+                                                               for r in fit.records]))
+        return self
+
+    def estimate_initial_state(self, y, t=None, *args, u=None, outputs=None, x0=None,
+                               x0_bounds=None, u_hold: str = "linear", substeps: int = 4):
+        """The initial state ``(n,)`` (a list for a list of records) that makes the fitted
+        model's simulation best match measured outputs (e.g. the first samples of a test
+        record); the model is unchanged.
+
+        Args:{common}
+        """
+        keywords_only("estimate_initial_state", args, "u, outputs and the options")
+        self.check_is_fitted()
+        from .output_fit import refit_outputs
+
+        _, x0s, _ = refit_outputs(self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds,
+                                  u_hold=u_hold, substeps=substeps, coefficients=False)
+        return list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
+
+    def _keep_outputs(self, y, x0s, fit, error):
+        self.x0_ = list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
+        self.output_error_ = error
+        self.output_names_ = list(fit.out_map.names)
+
+    fit_outputs.__doc__ = fit_outputs.__doc__.format(common=_COMMON)
+    refine.__doc__ = refine.__doc__.format(common=_COMMON)
+    estimate_initial_state.__doc__ = estimate_initial_state.__doc__.format(common=_COMMON)
