@@ -116,3 +116,29 @@ def test_the_library_imports_nothing_of_the_paper_package():
             names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
                 [node.module or ""] if isinstance(node, ast.ImportFrom) else []
             assert not any(n.startswith("discrepancy_paper") for n in names), path
+
+
+def test_simulate_takes_inputs_and_times_from_a_file(tmp_path, capsys):
+    """A forced oscillator x'' = -x + u fitted with its input; simulated from a file of input
+    samples (times from its t column) with the fast fixed-step method, it matches the exact
+    solution of the forced system; a model with inputs and no --inputs is refused."""
+    t = np.arange(2001) * 0.01
+    u = np.sin(0.7 * t)
+    exact = np.c_[(np.sin(0.7 * t) - 0.7 * np.sin(t)) / (1 - 0.49),
+                  0.7 * (np.cos(0.7 * t) - np.cos(t)) / (1 - 0.49)]
+    np.savetxt(tmp_path / "run.csv", np.c_[t, exact, u], delimiter=",", header="t,x1,x2,u",
+               comments="")
+    np.savetxt(tmp_path / "u.csv", np.c_[t, u], delimiter=",", header="t,u", comments="")
+    assert main(["fit", "--data", str(tmp_path / "run.csv"), "--inputs", "u",
+                 "--library", "poly(1)", "--optimizer", "stlsq(threshold=0.05)",
+                 "--out", str(tmp_path / "m.json")]) == 0
+    capsys.readouterr()
+    assert main(["simulate", "--model", str(tmp_path / "m.json"), "--x0=0,0", "--inputs",
+                 str(tmp_path / "u.csv"), "--method", "rk4", "--out",
+                 str(tmp_path / "sim.csv")]) == 0
+    sim = np.loadtxt(tmp_path / "sim.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(sim[:, 0], t)
+    assert np.abs(sim[:, 1:] - exact).max() < 1e-3 * np.abs(exact).max()
+    assert main(["simulate", "--model", str(tmp_path / "m.json"), "--x0=0,0", "--t",
+                 "0:1:0.1"]) == 2
+    assert "--inputs is required" in capsys.readouterr().err

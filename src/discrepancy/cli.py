@@ -17,6 +17,8 @@ EPILOG = """examples:
       --out model.json
   discrepancy simulate --model model.json --prior my_model.py:f_m --x0=-0.2,-0.3 --t 0:25:0.01 \\
       --out trajectory.csv
+  discrepancy simulate --model forced.json --x0=0,0 --inputs run.csv --method rk4 \\
+      --u-hold bandlimited                # inputs (and times) from a file
   discrepancy show model.json --latex
 
 --prior FILE.py:NAME imports (runs) FILE.py as Python code to get the function NAME: only
@@ -148,8 +150,11 @@ def cmd_simulate(args) -> None:
                              "which model files never store as code")
     model = DiscrepancyModel.from_state(
         doc, prior=_load_callable(args.prior) if args.prior else None)
-    t = _times(args.t)
-    x = model.simulate(_floats("--x0", args.x0), t)
+    t, u = _simulation_inputs(args, model)
+    options = {"u_hold": args.u_hold, "substeps": args.substeps}
+    if args.method:
+        options["method"] = args.method
+    x = model.simulate(_floats("--x0", args.x0), t, u=u, **options)
     table = np.column_stack([t, x])
     header = ",".join(["t", *model.state_names_])
     if args.out:
@@ -157,6 +162,31 @@ def cmd_simulate(args) -> None:
         print(f"wrote {len(t)} samples to {args.out}")
     else:
         np.savetxt(sys.stdout, table, delimiter=",", header=header, comments="", fmt="%.8g")
+
+
+def _simulation_inputs(args, model):
+    """Times and input samples: inputs from ``--inputs`` (its time column, or ``--t``)."""
+    from .errors import ParameterError, ShapeError
+    from .io import load
+
+    if not args.inputs:
+        if model.n_inputs_:
+            raise ParameterError(f"--inputs is required: the model has inputs "
+                                 f"{model.input_names_}; give a file of their samples")
+        if args.t is None:
+            raise ParameterError("--t is required (start:stop:step or comma-separated times)")
+        return _times(args.t), None
+    if not model.n_inputs_:
+        raise ParameterError("--inputs was given but the model has no inputs")
+    columns = args.input_columns.split(",") if args.input_columns else model.input_names_
+    data = load(args.inputs, states=columns, time="t")
+    t = _times(args.t) if args.t is not None else data.t
+    if t is None:
+        raise ParameterError(f"{args.inputs} has no time column 't'; give --t")
+    if len(t) != len(data.x):
+        raise ShapeError(f"--t has {len(t)} times but {args.inputs} has {len(data.x)} input "
+                         "samples; they must match")
+    return t, data.x
 
 
 def cmd_show(args) -> None:
@@ -209,7 +239,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--x0", required=True,
                    help="comma-separated initial state; write --x0=-0.2,-0.3 "
                    "when it starts with a minus")
-    s.add_argument("--t", required=True, help="start:stop:step or comma-separated times")
+    s.add_argument("--t", help="start:stop:step or comma-separated times (default: the "
+                   "time column of --inputs)")
+    s.add_argument("--inputs", help="file (CSV, NPZ, MAT, HDF5) of input samples, one column "
+                   "per input (named like the model's inputs), with a time column t or --t")
+    s.add_argument("--input-columns", help="comma-separated input column names in --inputs "
+                   "(default: the model's input names)")
+    s.add_argument("--u-hold", default="linear", choices=["linear", "zoh", "bandlimited"],
+                   help="the input between samples (default linear)")
+    s.add_argument("--method", help="LSODA (default) or another scipy method, or rk4 "
+                   "(fixed steps, compiled: fast for long records with measured inputs)")
+    s.add_argument("--substeps", type=int, default=4, help="rk4 steps per sample (default 4)")
     s.add_argument("--out", help="CSV file (default: print)")
     s.set_defaults(func=cmd_simulate)
     w = sub.add_parser("show", help="print a saved model's equations")

@@ -259,6 +259,20 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         return integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,
                          n_inputs=self.n_inputs_, **integrator_kws)
 
+    def predict_ahead(self, x, t=None, *args, u=None, steps: int = 1,
+                      u_hold: str = "linear", substeps: int = 4) -> np.ndarray:
+        """``steps``-ahead predictions from measured states ``x`` ``(m, n)`` at ``t``:
+        ``(m - steps, n)``, row ``i`` predicting ``x[i + steps]`` from ``x[i]`` (RK4 with
+        ``substeps`` per sample, the input held by ``u_hold``). Compare with ``x[steps:]``."""
+        keywords_only("predict_ahead", args, "u and the options")
+        self.check_is_fitted()
+        from .prediction import checked_states, predict_ahead
+
+        x = checked_states(self, x, u)
+        return predict_ahead(self._rhs_one, x, 1.0 if t is None else t, u,
+                             n_inputs=self.n_inputs_, steps=steps, u_hold=u_hold,
+                             substeps=substeps)
+
     def _has_jumps(self) -> bool:
         """Whether an active term or the (symbolic) prior is discontinuous (``sign``)."""
         import sympy as sp

@@ -1,0 +1,54 @@
+"""k-step-ahead prediction: from every measured state, where the model is ``k`` samples later.
+
+All starting points are integrated at once (RK4 with the input at its stage times, the
+steps :meth:`~discrepancy.models.DiscrepancyModel.simulate` takes with ``method="rk4"``),
+vectorised over the starts, so the cost is ``k`` steps of the whole record regardless of
+its length. ``k = 1`` is one-step-ahead prediction; free simulation is the limit of
+large ``k``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.trajectory import as_2d, as_times
+from ..errors import ParameterError, ShapeError
+from .inputs import stage_inputs
+
+
+def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,
+                  substeps: int) -> np.ndarray:
+    """States ``(m - steps, n)``: row ``i`` predicts ``x[i + steps]`` from ``x[i]``."""
+    if not isinstance(steps, (int, np.integer)) or isinstance(steps, bool) or steps < 1:
+        raise ParameterError(f"steps must be a positive integer; got {steps!r}")
+    if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or \
+            not 1 <= substeps <= 1000:
+        raise ParameterError(f"substeps must be an integer in [1, 1000]; got {substeps!r}")
+    m = x.shape[0]
+    if m <= steps:
+        raise ShapeError(f"x has {m} samples; predicting {steps} steps ahead needs more")
+    times = as_times("t", t, m)
+    stages = stage_inputs(u, times, n_inputs, substeps, hold=u_hold) if n_inputs else None
+    h = np.diff(times)
+    starts = m - steps
+    state = x[:starts].copy()
+    with np.errstate(over="ignore", invalid="ignore"):
+        for j in range(steps):
+            dt = (h[j:j + starts] / substeps)[:, None]
+            for s in range(substeps):
+                u0, um, u1 = (None, None, None) if stages is None else \
+                    (stages[j:j + starts, 2 * s + i] for i in range(3))
+                k1 = rhs(state, u0)
+                k2 = rhs(state + dt / 2 * k1, um)
+                k3 = rhs(state + dt / 2 * k2, um)
+                k4 = rhs(state + dt * k3, u1)
+                state = state + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return state
+
+
+def checked_states(model, x, u):
+    x = as_2d("x", x, n_cols=model.n_states_, allow_1d=model.n_states_ == 1)
+    if model.n_inputs_ and u is None:
+        raise ShapeError(f"u is required: the model has inputs {model.input_names_}")
+    if not model.n_inputs_ and u is not None:
+        raise ShapeError("u was given but the model has no inputs")
+    return x

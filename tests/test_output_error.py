@@ -1,0 +1,140 @@
+"""Output-error fits with unmeasured states, against systems whose hidden states and
+discrepancies are known; k-step-ahead prediction and the identification metrics."""
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import solve_ivp
+
+import discrepancy as dc
+from discrepancy.errors import DataError, ShapeError, UnknownNameError
+
+pytest.importorskip("casadi")
+
+
+def forcing(t, seed=1, width=20):
+    rng = np.random.default_rng(seed)
+    return 3 * np.convolve(rng.standard_normal(len(t)), np.ones(width) / width, mode="same")
+
+
+@pytest.fixture(scope="module")
+def oscillator():
+    """x'' = -x - 0.2 x' - 0.5 x^3 + u; only the position is measured (noise 0.01); the prior
+    has damping 0.1 and no cubic spring, so g = -0.1 v - 0.5 pos^3 acts on the hidden v."""
+    t = np.arange(1601) * 0.05
+    u = forcing(t)
+    law = lambda s: np.interp(s, t, u)  # noqa: E731
+    x = solve_ivp(lambda s, x: [x[1], -x[0] - 0.2 * x[1] - 0.5 * x[0] ** 3 + law(s)],
+                  (0, t[-1]), [0.5, -0.3], t_eval=t, rtol=1e-11, atol=1e-11,
+                  max_step=0.05).y.T
+    y = x[:, 0] + 0.01 * np.random.default_rng(2).standard_normal(len(t))
+    return t, u, x, y
+
+
+def oscillator_model(**kw):
+    pos, vel, u = sp.symbols("pos vel u", real=True)
+    return dc.DiscrepancyModel(prior=[vel, -pos - 0.1 * vel + u], state_names=["pos", "vel"],
+                               input_names=["u"],
+                               feature_library=dc.PolynomialLibrary(3, variables=["pos", "vel"]),
+                               constraints=dc.Constraints(exact_equations=["pos"]), **kw)
+
+
+def coefficient(model, state, term):
+    return model.coef_[model.state_names_.index(state), model.get_feature_names().index(term)]
+
+
+def test_hidden_velocity_and_its_discrepancy_from_the_position_alone(oscillator):
+    t, u, x, y = oscillator
+    model = oscillator_model().fit_outputs(y, t=t, u=u, outputs=["pos"], progress=False)
+    assert model.complexity == 2
+    assert coefficient(model, "vel", "vel") == pytest.approx(-0.1, rel=0.02)
+    assert coefficient(model, "vel", "pos^3") == pytest.approx(-0.5, rel=0.02)
+    np.testing.assert_allclose(model.x0_, x[0], atol=0.02)    # the hidden velocity too
+    sim = model.simulate(model.x0_, t, u=u, method="rk4")
+    assert np.abs(sim - x).max() < 0.05 * np.abs(x).max()
+
+
+@pytest.fixture(scope="module")
+def tanks():
+    """Two tanks in cascade, the lower one measured through a sensor that saturates at 1.2;
+    the truth leaks from the (unmeasured) upper tank: h1' = -0.5 sqrt(h1) + 0.4 u - 0.05 h1."""
+    t = np.arange(1201) * 0.2
+    u = 1.0 + 0.8 * np.sin(0.05 * t) + 0.5 * np.sin(0.13 * t + 1)
+    law = lambda s: np.interp(s, t, u)  # noqa: E731
+
+    def true(s, h):
+        h = np.maximum(h, 0)
+        return [-0.5 * np.sqrt(h[0]) + 0.4 * law(s) - 0.05 * h[0],
+                0.5 * np.sqrt(h[0]) - 0.6 * np.sqrt(h[1])]
+
+    h = solve_ivp(true, (0, t[-1]), [0.3, 0.4], t_eval=t, rtol=1e-11, atol=1e-11,
+                  max_step=0.2).y.T
+    return t, u, h, np.minimum(h[:, 1], 1.2)
+
+
+def test_a_discrepancy_in_the_hidden_equation_seen_through_a_saturating_sensor(tanks):
+    t, u, h, y = tanks
+    h1, h2, u_ = sp.symbols("h1 h2 u", real=True)
+    s1, s2 = sp.sqrt(sp.Max(h1, 0)), sp.sqrt(sp.Max(h2, 0))
+    model = dc.DiscrepancyModel(
+        prior=[-0.5 * s1 + 0.4 * u_, 0.5 * s1 - 0.6 * s2], state_names=["h1", "h2"],
+        input_names=["u"], feature_library=dc.CustomLibrary([sp.Integer(1), h1, h2, u_]))
+    model.fit_outputs(y, t=t, u=u, outputs=[sp.Min(h2, 1.2)], x0=[0.5, 0.5],
+                      x0_bounds=(0, 5), progress=False)
+    assert model.complexity == 1
+    assert coefficient(model, "h1", "h1") == pytest.approx(-0.05, rel=0.02)
+    np.testing.assert_allclose(model.x0_, h[0], rtol=0.02)
+
+
+def test_refine_and_a_new_records_initial_state(oscillator):
+    t, u, x, y = oscillator
+    model = oscillator_model(optimizer=dc.STLSQ(threshold=0.0)).fit(
+        x, t=t, u=u, x_dot=np.gradient(x, t, axis=0))      # crude derivatives: biased
+    model = model.with_coefficients(np.where(np.abs(model.coef_) > 0.05, model.coef_, 0.0))
+    model.refine(y, t=t, u=u, outputs=["pos"])
+    assert model.complexity == 2
+    assert coefficient(model, "vel", "pos^3") == pytest.approx(-0.5, rel=0.02)
+    later = slice(400, 450)                                  # a record starting elsewhere
+    x0 = model.estimate_initial_state(y[later], t=t[later], u=u[later], outputs=["pos"])
+    np.testing.assert_allclose(x0, x[400], atol=0.03)
+
+
+def test_bad_output_error_inputs_are_named(oscillator):
+    t, u, x, y = oscillator
+    with pytest.raises(ShapeError, match="y has 2 columns but outputs names 1"):
+        oscillator_model().fit_outputs(x, t=t, u=u, outputs=["pos"])
+    with pytest.raises(ShapeError, match="u"):
+        oscillator_model().fit_outputs(y, t=t, u=u[:-10], outputs=["pos"])
+    with pytest.raises(UnknownNameError, match="'speed' is not a state"):
+        oscillator_model().fit_outputs(y, t=t, u=u, outputs=["speed"])
+    with pytest.raises(dc.errors.ParameterError, match="outputs is required"):
+        oscillator_model().fit_outputs(y, t=t, u=u)
+    a, b, c = sp.symbols("a b c", real=True)
+    cut_off = dc.DiscrepancyModel(prior=[-a, -b + a, -c], state_names=["a", "b", "c"],
+                                  feature_library=dc.CustomLibrary([a, b]))
+    with pytest.raises(DataError, match=r"\['c'\] cannot influence the measured outputs"):
+        cut_off.fit_outputs(y, t=t, outputs=["b"])
+
+
+def test_predict_ahead_equals_simulations_from_each_state(oscillator):
+    t, u, x, _ = oscillator
+    model = oscillator_model(optimizer=dc.STLSQ(threshold=0.05)).fit(
+        x, t=t, u=u, x_dot=None)
+    ahead = model.predict_ahead(x, t, u=u, steps=5)
+    assert ahead.shape == (len(t) - 5, 2)
+    for i in (0, 700, len(t) - 6):
+        sim = model.simulate(x[i], t[i:i + 6], u=u[i:i + 6], method="rk4", compiled=False)
+        np.testing.assert_allclose(ahead[i], sim[-1], rtol=1e-12, atol=1e-12)
+    one = model.predict_ahead(x, t, u=u)
+    assert dc.metrics.rms_error(x[1:], one).max() < dc.metrics.rms_error(x[5:], ahead).max()
+
+
+def test_metrics_against_their_definitions():
+    y = np.array([1.0, 2.0, 4.0, 3.0])
+    y_hat = np.array([1.5, 2.0, 3.0, 3.0])
+    rms = np.sqrt((0.25 + 0 + 1 + 0) / 4)
+    assert dc.metrics.rms_error(y, y_hat) == pytest.approx(rms)
+    assert dc.metrics.nrmse(y, y_hat) == pytest.approx(rms / np.std(y))
+    fit = 100 * (1 - np.sqrt(1.25) / np.sqrt(np.sum((y - 2.5) ** 2)))
+    assert dc.metrics.fit_percent(y, y_hat) == pytest.approx(fit)
+    with pytest.raises(ShapeError, match="same shape"):
+        dc.metrics.rms_error(y, y_hat[:3])
