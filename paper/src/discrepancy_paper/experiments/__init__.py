@@ -13,6 +13,8 @@ EXPERIMENTS = {
     "pendulum-energy-experiment": ("pendulum_energy", "run_experiment"),
     "cart-swingup": ("cart_swingup", "run"),
     "noise-study": ("noise_study", "run"),
+    "silverbox": ("silverbox", "run"),
+    "cascaded-tanks": ("cascaded_tanks", "run"),
 }
 
 
