@@ -237,3 +237,21 @@ def test_halo_lets_chunks_reproduce_the_whole_derivative(method, rng):
         s, d = method(x[a - h:b + h], t[a - h:b + h])
         np.testing.assert_allclose(d[h:h + b - a], whole[a:b], rtol=1e-10, atol=1e-10)
         np.testing.assert_allclose(s[h:h + b - a], smooth[a:b], rtol=1e-10, atol=1e-12)
+
+
+def test_coarse_sampling_is_warned_about_for_the_method_that_suffers():
+    """10 samples per period: central differences are 6 % slow there, so the fit warns and
+    names the states; the automatic degree-7 smoother and the spectral derivative are
+    accurate at that sampling and are not warned about."""
+    import warnings
+
+    from discrepancy.errors import CoarseSamplingWarning
+
+    t = np.arange(2000) * 0.1
+    x = np.c_[np.sin(2 * np.pi * t), np.cos(2 * np.pi * t)]
+    with pytest.warns(CoarseSamplingWarning, match=r"x2 is sampled at about 10\.0 samples"):
+        dc.DiscrepancyModel(differentiation_method=dc.FiniteDifference()).fit(x, t=t)
+    for method in (None, dc.Spectral()):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CoarseSamplingWarning)
+            dc.DiscrepancyModel(differentiation_method=method).fit(x, t=t)

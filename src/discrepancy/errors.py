@@ -68,6 +68,10 @@ class ConvergenceWarning(UserWarning):
     """An iterative solver stopped at its iteration limit; its last iterate is used."""
 
 
+class CoarseSamplingWarning(UserWarning):
+    """The data have too few samples per period for the chosen differentiation method."""
+
+
 def describe(value) -> str:
     """Short description of a value for error messages: type and shape, never its content."""
     shape = getattr(value, "shape", None)

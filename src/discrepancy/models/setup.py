@@ -182,7 +182,7 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
         method, choice = NextSample(), None
     else:
         method = copy.deepcopy(get_differentiation_method(model.differentiation_method))
-        method, choice = _resolved(method, sample)
+        method, choice = _resolved(method, sample, states)
     optimizer = copy.deepcopy(get_optimizer(model.optimizer))
     if model.constraints is not None:
         if "constraints" not in optimizer.get_params(deep=False):
@@ -196,14 +196,17 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
                     optimizer, method, choice, bool(model.discrete_time), probe)
 
 
-def _resolved(method, sample):
-    """A data-driven method resolved on the trajectories of ``sample`` that need it."""
-    if not getattr(method, "data_driven", False) or sample is None:
+def _resolved(method, sample, names):
+    """A data-driven method resolved on the trajectories of ``sample`` that need it, and
+    checked against their sampling (a warning when it is too coarse for the method)."""
+    series = [] if sample is None else [(tr.t, tr.x) for tr in sample if tr.x_dot is None]
+    if not series:  # no data, or measured derivatives: nothing to differentiate
         return method, None
-    series = [(tr.t, tr.x) for tr in sample if tr.x_dot is None]
-    if not series:  # every trajectory has measured derivatives: nothing to differentiate
-        return method, None
-    return method.choose(series)
+    method, choice = method.choose(series) if getattr(method, "data_driven", False) else \
+        (method, None)
+    from ..differentiation.resolution import warn_if_coarse
+    warn_if_coarse(method, *series[0], names)
+    return method, choice
 
 
 def resolve_names(arg: str, given, k: int, stem: str, *, one) -> list[str]:
