@@ -138,3 +138,22 @@ def test_metrics_against_their_definitions():
     assert dc.metrics.fit_percent(y, y_hat) == pytest.approx(fit)
     with pytest.raises(ShapeError, match="same shape"):
         dc.metrics.rms_error(y, y_hat[:3])
+
+
+def test_coefficient_intervals_hold_the_truth_over_noise_seeds(oscillator, capsys):
+    """The sandwich covariance's 95 % intervals hold the true damping and cubic coefficients
+    in 90-100 % of 12 seeds x 2 coefficients, with output noise 0.05."""
+    t, u, x, _ = oscillator
+    pos, vel = sp.symbols("pos vel", real=True)
+    inside = []
+    for seed in range(12):
+        y = x[:, 0] + 0.05 * np.random.default_rng(100 + seed).standard_normal(len(t))
+        model = oscillator_model(optimizer=dc.STLSQ(threshold=0.0))
+        model.feature_library = dc.CustomLibrary([vel, pos ** 3])
+        model.fit_outputs(y, t=t, u=u, outputs=["pos"])
+        low, high = model.uncertainty_.interval(0.95)
+        truth = np.array([-0.1, -0.5])
+        inside.extend((low[1] <= truth) & (truth <= high[1]))
+    assert 0.9 <= np.mean(inside) <= 1.0
+    model.print(uncertainty=model.uncertainty_)
+    assert "±" in capsys.readouterr().out

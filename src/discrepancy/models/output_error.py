@@ -31,6 +31,8 @@ RIDGE = 1e-6
 NEGLIGIBLE = 1e-3
 #: contiguous blocks per record for the standard error of a held-out score
 SCORE_BLOCKS = 8
+#: contiguous blocks per record for the coefficients' covariance
+COVARIANCE_BLOCKS = 20
 
 
 class _Record:
@@ -123,6 +125,30 @@ class OutputErrorFit:
             ftol=1e-9, gtol=1e-9)
         _, flat, x0s = self._parts(result.x, support)
         return flat.reshape(self.n, self.p), x0s, float(2 * result.cost)
+
+    def coefficient_covariance(self, support, coef, x0s, rows, blocks: int = COVARIANCE_BLOCKS):
+        """Covariance ``(n p, n p)`` of the fitted coefficients (zero off ``support``): the
+        Gauss–Newton sandwich ``B⁻¹ M B⁻¹`` with ``B = JᵀJ`` and ``M`` summed over
+        ``blocks`` contiguous blocks of samples per record (``Σ_b J_bᵀ r_b r_bᵀ J_b``), so
+        errors correlated in time widen it as they should; initial states are profiled."""
+        index = np.flatnonzero(support.ravel())
+        theta = np.concatenate([coef.ravel()[index] / self.coef_scale[index], x0s.ravel()])
+        r, J = self.residuals(theta, support, rows, 0.0)
+        k = self.out_map.k
+        bread = np.linalg.pinv(J.T @ J)
+        meat = np.zeros_like(bread)
+        start = 0
+        for w in rows:
+            size = int(w.sum()) * k
+            for part in np.array_split(np.arange(start, start + size), min(blocks, size)):
+                score = J[part].T @ r[part]
+                meat += np.outer(score, score)
+            start += size
+        scaled = (bread @ meat @ bread)[:len(index), :len(index)]
+        out = np.zeros((self.n * self.p, self.n * self.p))
+        out[np.ix_(index, index)] = scaled * np.outer(self.coef_scale[index],
+                                                      self.coef_scale[index])
+        return out
 
     # ------------------------------------------------------------------ scores
     def simulate_outputs(self, coef, x0s):

@@ -88,6 +88,7 @@ def fit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, max
     coef, x0s, _ = fit.solve(support, coef * support, x0s, everything, 0.0)
     coef[~support] = 0.0
     error = warn_if_not_converged(fit, coef, x0s, everything)
+    fit.covariance = fit.coefficient_covariance(support, coef, x0s, everything)
     return setup, coef, x0s, fit, path, error
 
 
@@ -202,4 +203,22 @@ def refit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, c
     support = (model.coef_ != 0) if coefficients else np.zeros_like(model.coef_, bool)
     fit.set_coef_scale(x0s)
     coef, x0s, _ = fit.solve(support, model.coef_, x0s, everything, 0.0)
+    if coefficients:
+        fit.covariance = fit.coefficient_covariance(support, coef, x0s, everything)
     return coef, x0s, fit
+
+
+def gaussian_uncertainty(model, covariance, *, draws: int = 1000, seed: int = 0):
+    """The coefficients' uncertainty as draws from ``N(coef_, covariance)`` (a
+    :class:`~discrepancy.models.uncertainty.CoefficientUncertainty`, so ``print``,
+    ``predict_interval`` and ``simulate_interval`` take it as they take a bootstrap)."""
+    from .uncertainty import CoefficientUncertainty
+
+    n, p = model.coef_.shape
+    rng = np.random.default_rng(seed)
+    values, vectors = np.linalg.eigh((covariance + covariance.T) / 2)
+    root = vectors * np.sqrt(np.clip(values, 0, None))
+    samples = model.coef_.ravel() + rng.standard_normal((draws, n * p)) @ root.T
+    samples = samples.reshape(draws, n, p) * (model.coef_ != 0)
+    return CoefficientUncertainty(model.coef_.copy(), samples, list(model.state_names_),
+                                  model.get_feature_names(), 0)

@@ -44,7 +44,9 @@ class OutputErrorMethods:
                 ``state_names``, a sympy prior or ``x0``.
 
         After the fit, ``x0_`` holds the estimated initial states, ``output_selection_``
-        the scored supports and ``output_error_`` the scaled RMS output error of the fit.
+        the scored supports, ``output_error_`` the scaled RMS output error of the fit and
+        ``uncertainty_`` the coefficients' uncertainty (a Gauss–Newton sandwich over blocks
+        of samples, as draws: ``model.print(uncertainty=model.uncertainty_)``).
         """
         keywords_only("fit_outputs", args, "u, outputs and the options")
         from .output_fit import fit_outputs
@@ -63,7 +65,8 @@ class OutputErrorMethods:
                u_hold: str = "linear", substeps: int = 4):
         """Refit the nonzero coefficients of a fitted model (and the initial states) by
         output error on measured outputs, keeping its terms: e.g. after a derivative-based
-        fit whose derivatives were noisy or whose velocities were estimated.
+        fit whose derivatives were noisy or whose velocities were estimated. Sets ``x0_``,
+        ``output_error_`` and ``uncertainty_`` as :meth:`fit_outputs` does.
 
         Args:{common}
         """
@@ -96,9 +99,12 @@ class OutputErrorMethods:
         return list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
 
     def _keep_outputs(self, y, x0s, fit, error):
+        from .output_fit import gaussian_uncertainty
+
         self.x0_ = list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
         self.output_error_ = error
         self.output_names_ = list(fit.out_map.names)
+        self.uncertainty_ = gaussian_uncertainty(self, fit.covariance)
 
     fit_outputs.__doc__ = fit_outputs.__doc__.format(common=_COMMON)
     refine.__doc__ = refine.__doc__.format(common=_COMMON)
