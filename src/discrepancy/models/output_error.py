@@ -130,20 +130,24 @@ class OutputErrorFit:
         """Covariance ``(n p, n p)`` of the fitted coefficients (zero off ``support``): the
         Gauss–Newton sandwich ``B⁻¹ M B⁻¹`` with ``B = JᵀJ`` and ``M`` summed over
         ``blocks`` contiguous blocks of samples per record (``Σ_b J_bᵀ r_b r_bᵀ J_b``), so
-        errors correlated in time widen it as they should; initial states are profiled."""
+        errors correlated in time widen it as they should; initial states are profiled.
+        ``covariance_blocks`` keeps the number of blocks (the degrees of freedom + 1)."""
         index = np.flatnonzero(support.ravel())
         theta = np.concatenate([coef.ravel()[index] / self.coef_scale[index], x0s.ravel()])
         r, J = self.residuals(theta, support, rows, 0.0)
         k = self.out_map.k
         bread = np.linalg.pinv(J.T @ J)
         meat = np.zeros_like(bread)
-        start = 0
+        start, count = 0, 0
         for w in rows:
             size = int(w.sum()) * k
             for part in np.array_split(np.arange(start, start + size), min(blocks, size)):
                 score = J[part].T @ r[part]
                 meat += np.outer(score, score)
+                count += 1
             start += size
+        self.covariance_blocks = count
+        meat *= count / max(count - 1, 1)       # the usual small-sample correction
         scaled = (bread @ meat @ bread)[:len(index), :len(index)]
         out = np.zeros((self.n * self.p, self.n * self.p))
         out[np.ix_(index, index)] = scaled * np.outer(self.coef_scale[index],

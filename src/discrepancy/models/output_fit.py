@@ -208,17 +208,19 @@ def refit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, c
     return coef, x0s, fit
 
 
-def gaussian_uncertainty(model, covariance, *, draws: int = 1000, seed: int = 0):
-    """The coefficients' uncertainty as draws from ``N(coef_, covariance)`` (a
+def sandwich_uncertainty(model, covariance, dof: int, *, draws: int = 1000, seed: int = 0):
+    """The coefficients' uncertainty as draws from a multivariate Student t around ``coef_``
+    with scale ``covariance`` and ``dof`` degrees of freedom (blocks minus one), as a
     :class:`~discrepancy.models.uncertainty.CoefficientUncertainty`, so ``print``,
-    ``predict_interval`` and ``simulate_interval`` take it as they take a bootstrap)."""
+    ``predict_interval`` and ``simulate_interval`` take it as they take a bootstrap."""
     from .uncertainty import CoefficientUncertainty
 
     n, p = model.coef_.shape
     rng = np.random.default_rng(seed)
     values, vectors = np.linalg.eigh((covariance + covariance.T) / 2)
     root = vectors * np.sqrt(np.clip(values, 0, None))
-    samples = model.coef_.ravel() + rng.standard_normal((draws, n * p)) @ root.T
+    stretch = np.sqrt(dof / rng.chisquare(max(dof, 1), size=(draws, 1)))
+    samples = model.coef_.ravel() + stretch * (rng.standard_normal((draws, n * p)) @ root.T)
     samples = samples.reshape(draws, n, p) * (model.coef_ != 0)
     return CoefficientUncertainty(model.coef_.copy(), samples, list(model.state_names_),
                                   model.get_feature_names(), 0)

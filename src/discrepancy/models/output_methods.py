@@ -99,12 +99,13 @@ class OutputErrorMethods:
         return list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
 
     def _keep_outputs(self, y, x0s, fit, error):
-        from .output_fit import gaussian_uncertainty
+        from .output_fit import sandwich_uncertainty
 
         self.x0_ = list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
         self.output_error_ = error
         self.output_names_ = list(fit.out_map.names)
-        self.uncertainty_ = gaussian_uncertainty(self, fit.covariance)
+        self.uncertainty_ = sandwich_uncertainty(self, fit.covariance,
+                                                 fit.covariance_blocks - 1)
 
     fit_outputs.__doc__ = fit_outputs.__doc__.format(common=_COMMON)
     refine.__doc__ = refine.__doc__.format(common=_COMMON)
