@@ -158,3 +158,26 @@ def test_coefficient_intervals_hold_the_truth_over_noise_seeds(oscillator, capsy
     assert 0.9 <= np.mean(inside) <= 1.0
     model.print(uncertainty=model.uncertainty_)
     assert "±" in capsys.readouterr().out
+
+
+def test_a_hidden_predator_with_a_numpy_prior_over_two_records_and_no_guess():
+    """Lotka-Volterra, only the prey measured, over two records; the prior (a numpy callable,
+    traced into CasADi) has the predator's gain 0.2 instead of 0.3. No x0 is given: the
+    unmeasured predator starts from the outputs' size, not from 0 (a fixed point)."""
+    def true(_, z):
+        return [z[0] - 0.5 * z[0] * z[1], -0.8 * z[1] + 0.3 * z[0] * z[1]]
+
+    def prior(z, u=None):
+        return np.c_[z[:, 0] - 0.5 * z[:, 0] * z[:, 1], -0.8 * z[:, 1] + 0.2 * z[:, 0] * z[:, 1]]
+
+    t = np.arange(0, 30, 0.05)
+    runs = [solve_ivp(true, (0, t[-1]), x0, t_eval=t, rtol=1e-10, atol=1e-10).y.T
+            for x0 in ([2.0, 1.0], [1.0, 3.0])]
+    rng = np.random.default_rng(0)
+    ys = [z[:, 0] + 0.01 * rng.standard_normal(len(t)) for z in runs]
+    model = dc.DiscrepancyModel(prior=prior, state_names=["prey", "pred"],
+                                feature_library=dc.PolynomialLibrary(2))
+    model.fit_outputs(ys, t=t, outputs=["prey"])
+    assert model.complexity == 1
+    assert coefficient(model, "pred", "prey pred") == pytest.approx(0.1, rel=0.02)
+    np.testing.assert_allclose(model.x0_, [z[0] for z in runs], rtol=0.02)

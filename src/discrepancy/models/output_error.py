@@ -98,14 +98,18 @@ class OutputErrorFit:
         r = np.concatenate(parts) * scale
         if ridge and len(index):
             r = np.concatenate([r, np.sqrt(ridge) * theta[:len(index)]])
-        if not np.all(np.isfinite(r)):
+        diverged = not np.all(np.isfinite(r))
+        if diverged:
             r = np.full_like(r, 1e6)                       # a diverging trial is rejected
         if not jacobian:
             return r
         J = np.vstack(jacobians) * scale
         if ridge and len(index):
             J = np.vstack([J, np.sqrt(ridge) * np.eye(len(index), width)])
-        return r, np.nan_to_num(J)
+        if diverged:
+            return r, np.zeros_like(J)                     # nowhere to go from here
+        # an infinite slope (sqrt at 0) or an undefined one at a kink counts as flat there
+        return r, np.nan_to_num(J, nan=0.0, posinf=0.0, neginf=0.0)
 
     def solve(self, support, coef, x0s, rows, ridge, *, max_evaluations: int = 200):
         """Least squares from ``coef`` ``(n, p)`` and ``x0s``; returns ``(coef, x0s, cost)``.
@@ -118,13 +122,18 @@ class OutputErrorFit:
                                 np.tile(self.bounds[1], len(self.records))])
         theta0 = np.clip(np.concatenate([coef.ravel()[index] / self.coef_scale[index],
                                          x0s.ravel()]), lower, upper)
-        result = scipy.optimize.least_squares(
+        with np.errstate(all="ignore"):
+            result = self._least_squares(support, rows, ridge, theta0, lower, upper,
+                                         max_evaluations)
+        _, flat, x0s = self._parts(result.x, support)
+        return flat.reshape(self.n, self.p), x0s, float(2 * result.cost)
+
+    def _least_squares(self, support, rows, ridge, theta0, lower, upper, max_evaluations):
+        return scipy.optimize.least_squares(
             lambda th: self.residuals(th, support, rows, ridge, jacobian=False), theta0,
             jac=lambda th: self.residuals(th, support, rows, ridge)[1], method="trf",
             bounds=(lower, upper), x_scale="jac", max_nfev=max_evaluations, xtol=1e-9,
             ftol=1e-9, gtol=1e-9)
-        _, flat, x0s = self._parts(result.x, support)
-        return flat.reshape(self.n, self.p), x0s, float(2 * result.cost)
 
     def coefficient_covariance(self, support, coef, x0s, rows, blocks: int = COVARIANCE_BLOCKS):
         """Covariance ``(n p, n p)`` of the fitted coefficients (zero off ``support``): the

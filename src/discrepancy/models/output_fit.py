@@ -74,9 +74,7 @@ def fit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, max
     setup = model.make_setup(n, r)
     fit, x0s, everything = prepare(setup, records, outputs=outputs, x0=x0,
                                    x0_bounds=x0_bounds, substeps=substeps)
-    none = np.zeros((n, setup.n_features), bool)
-    zero = np.zeros((n, setup.n_features))
-    _, x0s, _ = fit.solve(none, zero, x0s, everything, 0.0)     # the prior's best start
+    x0s = _prior_start(fit, x0s, everything, guessed=x0 is None)
     fit.set_coef_scale(x0s)
     threshold = getattr(setup.optimizer, "threshold", "auto")
     if threshold == "auto":
@@ -90,6 +88,27 @@ def fit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, max
     error = warn_if_not_converged(fit, coef, x0s, everything)
     fit.covariance = fit.coefficient_covariance(support, coef, x0s, everything)
     return setup, coef, x0s, fit, path, error
+
+
+def _prior_start(fit, x0s, rows, *, guessed: bool):
+    """Initial states that fit the outputs best with the prior alone. Without a guess the
+    unmeasured states are tried at 0 and at plus and minus the outputs' typical size (a
+    state at 0 can be a fixed point the fit cannot leave)."""
+    none = np.zeros((fit.n, fit.p), bool)
+    hidden = sorted(set(range(fit.n)) - fit.out_map.measured)
+    starts = [x0s]
+    if guessed and hidden:
+        size = float(np.mean([np.abs(r.y).mean() for r in fit.records])) or 1.0
+        for sign in (1.0, -1.0):
+            other = x0s.copy()
+            other[:, hidden] = sign * size
+            starts.append(np.clip(other, *fit.bounds))
+    best = None
+    for start in starts:
+        _, x0s, cost = fit.solve(none, fit.fixed, start, rows, 0.0)
+        if best is None or cost < best[1]:
+            best = (x0s, cost)
+    return best[0]
 
 
 def _check_options(max_terms, holdout, tolerance):
