@@ -177,7 +177,7 @@ def test_a_hidden_predator_with_a_numpy_prior_over_two_records_and_no_guess():
     ys = [z[:, 0] + 0.01 * rng.standard_normal(len(t)) for z in runs]
     model = dc.DiscrepancyModel(prior=prior, state_names=["prey", "pred"],
                                 feature_library=dc.PolynomialLibrary(2))
-    model.fit_outputs(ys, t=t, outputs=["prey"])
+    model.fit_outputs(ys, t=0.05, outputs=["prey"])
     assert model.complexity == 1
     assert coefficient(model, "pred", "prey pred") == pytest.approx(0.1, rel=0.02)
     np.testing.assert_allclose(model.x0_, [z[0] for z in runs], rtol=0.02)
