@@ -12,6 +12,9 @@ EXPERIMENTS = {
     "pendulum-energy": ("pendulum_energy", "run_synthetic"),
     "pendulum-energy-experiment": ("pendulum_energy", "run_experiment"),
     "cart-swingup": ("cart_swingup", "run"),
+    "cart-mpc": ("cart_mpc", "run"),
+    "cart-leaderboard": ("cart_leaderboard", "run"),
+    "pendulum-cart-mpc": ("pendulum_cart_mpc", "run"),
     "noise-study": ("noise_study", "run"),
 }
 
