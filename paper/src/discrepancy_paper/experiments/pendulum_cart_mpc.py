@@ -126,10 +126,11 @@ def run(out_dir, *, quick: bool = False, verbose=None):
                                                   c["ds"].get("u", 0.0))
                   for c in (r["coefficients_after"] for r in v["coefficients_after_each_attempt"])
                   if c)] for k, v in learning.items()])
-    rep.figure(learning_figure(learning, {"u in (ds)'": ("ds", "u"),
-                                          "cos(phi) u in (dphi)'": ("dphi", "cos(phi) u")}),
-               "learning.png", f"Coefficients learned after each attempt (exact: "
-                               f"{exact_u:.3g} and {exact_cos_u:.4g})")
+    rep.figure(learning_figure(learning, {"u in (ds)'": ("ds", "u", exact_u),
+                                          "cos(φ) u in (φ̇)'": ("dphi", "cos(phi) u",
+                                                                exact_cos_u)}),
+               "learning.png", f"Two terms of the discrepancy in the model used at each attempt, "
+                               f"over their exact values ({exact_u:.3g} and {exact_cos_u:.4g})")
     rep.text(f"## {n} perturbed true systems (m, a, I, k within ±2 %)")
     rep.table(["controller", "success (limits kept)", "upright at the end (limits ignored)",
                "cart within the rail"],

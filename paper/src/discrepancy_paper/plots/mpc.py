@@ -71,41 +71,45 @@ def leaderboard_figure(study: dict, controllers, *, rail):
 
 
 def learning_figure(learning: dict, terms: dict):
-    """Learned coefficients after each attempt (one line per ``terms`` entry
-    ``{label: (state, term)}``), one panel per system; the last attempt (a success) has no
-    learned model and is marked on the axis."""
+    """Each term's coefficient in the model used at each attempt, over its exact value
+    (``terms``: ``{label: (state, term, exact)}``; attempt 1 uses the prior, so 0), one
+    panel per system; successful attempts are green."""
     fig, axes = plt.subplots(1, len(learning), figsize=(4.4 * len(learning), 3.2),
-                             squeeze=False)
+                             squeeze=False, sharey=True)
     for ax, (name, summary) in zip(axes[0], learning.items(), strict=True):
         rows = summary["coefficients_after_each_attempt"]
-        for k, (label, (state, term)) in enumerate(terms.items()):
-            xs = [r["attempt"] for r in rows if r["coefficients_after"]]
-            ys = [r["coefficients_after"][state].get(term, 0.0) for r in rows
-                  if r["coefficients_after"]]
-            ax.plot(xs, ys, "-o", color=f"C{k}", label=label, ms=4)
-        for r in rows:
-            ax.axvline(r["attempt"], color="tab:green" if r["success"] else "0.85", lw=0.8,
-                       zorder=0)
+        attempts = [r["attempt"] for r in rows]
+        for k, (label, (state, term, exact)) in enumerate(terms.items()):
+            used = [0.0] + [r["coefficients_after"][state].get(term, 0.0) / exact
+                            for r in rows[:-1]]
+            ax.plot(attempts, used, "-o", color=f"C{k}", label=label, ms=5)
+        ok = [r["attempt"] for r in rows if r["success"]]
+        ax.scatter(ok, [1.0] * len(ok), s=160, facecolors="none", edgecolors="tab:green",
+                   lw=2, label="attempt succeeded")
+        ax.axhline(1.0, color="0.5", ls=":", lw=1)
+        ax.set_xticks(attempts)
         ax.set_title(f"{name}: success at attempt {summary['attempts_to_success']}", fontsize=9)
-        ax.set_xlabel("attempt (green: succeeded)")
+        ax.set_xlabel("attempt")
         ax.grid(alpha=0.3)
-    axes[0, 0].set_ylabel("coefficient learned after the attempt")
+    axes[0, 0].set_ylabel("coefficient in the model used / exact value")
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     return fig
 
 
 def solve_time_figure(times: dict, *, period):
-    """Histogram of MPC solve times (ms) ``{label: seconds}``, control period dashed."""
+    """Histogram of MPC solve times per sample (ms) ``{label: (cpu s, wall s)}``: CPU time
+    drawn, wall-clock figures in the legend; the control period dashed."""
     fig, ax = plt.subplots(figsize=(7, 3.2))
-    for k, (label, t) in enumerate(times.items()):
-        ms = 1e3 * np.asarray(t)
+    for k, (label, (cpu, wall)) in enumerate(times.items()):
+        ms, wall = 1e3 * np.asarray(cpu), 1e3 * np.asarray(wall)
         ax.hist(ms, bins=np.logspace(np.log10(max(ms.min(), 0.1)), np.log10(ms.max()) + 0.05,
                                      40), alpha=0.6, color=f"C{k}",
-                label=f"{label}: median {np.median(ms):.1f} ms, worst {ms.max():.1f} ms")
+                label=f"{label}: CPU median {np.median(ms):.1f} ms, worst {ms.max():.1f} ms "
+                      f"(wall {np.median(wall):.1f} / {wall.max():.1f} ms)")
     ax.axvline(1e3 * period, color="tab:red", ls="--", label=f"control period {1e3 * period:g} ms")
     ax.set_xscale("log")
-    ax.set_xlabel("solve time per sample (ms, wall clock)")
+    ax.set_xlabel("CPU time per MPC solve (ms)")
     ax.set_ylabel("samples")
     ax.legend(fontsize=7)
     fig.tight_layout()
