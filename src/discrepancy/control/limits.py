@@ -135,11 +135,11 @@ class Limits:
         u0 = np.zeros(r) if u_initial is None else np.asarray(u_initial, dtype=float).ravel()
         rates = np.abs(np.diff(np.vstack([u0, run.u]), axis=0)) / (run.t[1] - run.t[0])
         ratio = float(np.max(rates / du, initial=0.0))
-        out = {"within_state_bounds": x_excess <= state_tol,
-               "within_input_bounds": u_excess <= rel_tol * max(1.0, np.max(np.abs(run.u))),
-               "within_rate_limits": ratio <= 1 + 1e-6,
+        out = {"within_state_bounds": bool(x_excess <= state_tol),
+               "within_input_bounds": bool(u_excess <= rel_tol * max(1.0, np.max(np.abs(run.u)))),
+               "within_rate_limits": bool(ratio <= 1 + 1e-6),
                "max_state_excess": max(x_excess, 0.0), "max_input_excess": max(u_excess, 0.0),
                "max_rate_ratio": ratio}
-        out["respected"] = bool(out["within_state_bounds"] and out["within_input_bounds"]
-                                and out["within_rate_limits"])
+        out["respected"] = out["within_state_bounds"] and out["within_input_bounds"] \
+            and out["within_rate_limits"]
         return out
