@@ -12,11 +12,11 @@ import os
 import time
 
 import numpy as np
-from discrepancy.experiments.cart_swingup import X_HANG, make_plan
 
 from discrepancy.control import as_casadi, replay
 from discrepancy.symbolic import compile_numpy
 from discrepancy.systems.double_pendulum_on_cart import DoublePendulumOnCart
+from discrepancy_paper.experiments.cart_swingup import X_HANG, make_plan
 
 
 def timed(fn, repeats):

@@ -6,6 +6,7 @@ from scipy.linalg import expm, solve_discrete_are
 
 import discrepancy as dc
 from discrepancy.control import (
+    Plan,
     as_casadi,
     from_equations,
     plan_trajectory,
@@ -16,7 +17,7 @@ from discrepancy.control import (
 )
 from discrepancy.control.replay import interval_defects
 from discrepancy.control.sensitivity import parameter_sensitivity, state_transition
-from discrepancy.errors import ConvergenceError, ExportError, ParameterError, ShapeError
+from discrepancy.errors import ExportError, InfeasibleError, ParameterError, ShapeError
 from discrepancy.symbolic import symbol
 from discrepancy.systems.double_pendulum_on_cart import DoublePendulumOnCart
 
@@ -69,7 +70,7 @@ def test_minimum_effort_double_integrator_matches_the_analytic_optimum():
 
 
 def test_infeasible_request_reports_ipopt_status():
-    with pytest.raises(ConvergenceError, match="Infeasible_Problem_Detected"):
+    with pytest.raises(InfeasibleError, match="Infeasible_Problem_Detected"):
         plan_trajectory(double_integrator(), x0=[0, 0], xf=[1, 0], T=1.0, n_intervals=20,
                         cost="effort", Q=[1, 1], u_bounds=[[-1, 1]], verbose=False)
 
@@ -152,3 +153,30 @@ def test_swing_up_plan_is_accurate_on_its_own_model():
     assert swing_up_errors(own.final, angles=(0, 1), rates=(3, 4))["success"]
     scipy_run = replay(system.rhs, x0, plan.t, plan.u)  # DOP853 on the numpy form
     np.testing.assert_allclose(scipy_run.final, own.final, atol=1e-4)
+
+
+def test_tvlqr_hands_over_to_the_stationary_lqr_after_the_plan():
+    """Double integrator (RK4 exact on quadratics): with Q_final='lqr' the recursion starts at
+    the discrete Riccati solution, stays there, and the tracker balances with its gain."""
+    f = double_integrator()
+    plan = plan_trajectory(f, x0=[1, 0], xf=[0, 0], T=2.0, n_intervals=20, cost="effort",
+                           Q=[1, 1], verbose=False)
+    tracker = tvlqr(f, plan, Q=[1.0, 2.0], R=0.5, Q_final="lqr")
+    dt = plan.dt
+    A, B = np.array([[1, dt], [0, 1]]), np.array([[dt ** 2 / 2], [dt]])
+    P = solve_discrete_are(A, B, np.diag([1.0, 2.0]), np.array([[0.5]]))
+    K = np.linalg.solve(0.5 + B.T @ P @ B, B.T @ P @ A)
+    np.testing.assert_allclose(tracker.cost_to_go[-1], P, rtol=1e-10)
+    np.testing.assert_allclose(tracker.cost_to_go[0], P, rtol=1e-8)
+    np.testing.assert_allclose(tracker.final_gain, K, rtol=1e-10)
+    x = np.array([0.1, -0.2])
+    np.testing.assert_allclose(tracker(len(plan.u) + 5, x), -K @ x, rtol=1e-10)
+    x1, u1 = ca.SX.sym("x", 1), ca.SX.sym("u", 1)
+    drift = ca.Function("f", [x1, u1], [x1 + 0 * u1])   # the input cannot stop x' = x
+    t = np.linspace(0, 1, 11)
+    free = Plan(t=t, x=np.exp(t)[:, None], u=np.zeros((10, 1)), cost="effort", objective=0.0,
+                status="given", iterations=0, solve_time=0.0, substeps=4)
+    with pytest.raises(InfeasibleError, match="stabilisable"):
+        tvlqr(drift, free, Q_final="lqr")
+    with pytest.raises(ParameterError, match="Q_final"):
+        tvlqr(f, plan, Q_final="riccati")

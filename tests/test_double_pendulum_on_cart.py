@@ -148,3 +148,19 @@ def test_parametric_equations_match_a_perturbed_system():
     values = np.column_stack([compile_numpy(e, names)(z) for e in rhs])
     np.testing.assert_allclose(values[:, 3:5], textbook_accelerations(x, u, params), rtol=1e-10,
                                atol=1e-10)
+
+
+def test_motor_gain_scales_the_cart_acceleration_everywhere():
+    rng = np.random.default_rng(7)
+    x, u = random_states(rng, 30)
+    system = DoublePendulumOnCart(CartPendulumParameters(gain=1.3))
+    f = system.rhs(x, u)
+    np.testing.assert_allclose(f[:, 3:5], textbook_accelerations(x, 1.3 * u), rtol=1e-10,
+                               atol=1e-10)
+    np.testing.assert_allclose(f[:, 5], 1.3 * u[:, 0])
+    states, inputs, parameters, rhs = DoublePendulumOnCart.parametric_equations()
+    names = [s.name for s in [*states, *inputs, *parameters]]
+    z = np.hstack([x, u, np.tile([getattr(system.parameters, p.name) for p in parameters],
+                                 (30, 1))])
+    values = np.column_stack([compile_numpy(e, names)(z) for e in rhs])
+    np.testing.assert_allclose(values, f, rtol=1e-10, atol=1e-10)

@@ -48,7 +48,8 @@ def test_hierarchy():
              (errors.ParameterError, ValueError), (errors.UnknownNameError, ValueError),
              (errors.NotFittedError, AttributeError), (errors.PriorError, ValueError),
              (errors.ModelFileError, ValueError), (errors.ExportError, ValueError),
-             (errors.ConvergenceError, RuntimeError)]
+             (errors.ConvergenceError, RuntimeError),
+             (errors.InfeasibleError, ValueError)]
     for cls, builtin in pairs:
         assert issubclass(cls, DiscrepancyError) and issubclass(cls, builtin)
 

@@ -43,6 +43,12 @@ class ExportError(DiscrepancyError, ValueError):
     """A model cannot be exported to the requested form (e.g. a numpy-only term to CasADi)."""
 
 
+class InfeasibleError(DiscrepancyError, ValueError):
+    """A control problem cannot be met as posed: limits too tight for the task (a rail too
+    short for the swing), a horizon too short. The message names the limit or horizon and,
+    where it was measured, what the task needs."""
+
+
 class MissingDependencyError(DiscrepancyError, ImportError):
     """An optional dependency is not installed; the message says which extra installs it."""
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import sys
 
 from .experiments import EXPERIMENTS, get_experiment
@@ -15,6 +16,8 @@ def add_reproduce(subparsers) -> None:
     r.add_argument("name", choices=[*EXPERIMENTS, "all"])
     r.add_argument("--out", default="out", help="output folder (default: out)")
     r.add_argument("--quick", action="store_true", help="fewer seeds/cases (for smoke tests)")
+    r.add_argument("--full", action="store_true", help="the whole study where an experiment "
+                   "runs a smaller one by default (cart-leaderboard: the full grid)")
     r.set_defaults(func=reproduce)
 
 
@@ -26,8 +29,12 @@ def reproduce(args) -> int:
     failed = []
     for name in names:
         print(f"[{name}] running ...", flush=True)
+        run = get_experiment(name)
+        options = {"quick": args.quick}
+        if getattr(args, "full", False) and "full" in inspect.signature(run).parameters:
+            options["full"] = True
         try:
-            folder = get_experiment(name)(args.out, quick=args.quick)
+            folder = run(args.out, **options)
         except (DiscrepancyError, OSError) as e:
             if len(names) == 1:
                 raise

@@ -12,6 +12,8 @@ _LAZY = {
     "DoublePendulumParameters": "double_pendulum",
     "DoublePendulumOnCart": "double_pendulum_on_cart",
     "CartPendulumParameters": "double_pendulum_on_cart",
+    "PendulumOnCart": "pendulum_on_cart",
+    "PendulumOnCartParameters": "pendulum_on_cart",
 }
 
 __all__ = ["System", *_LAZY]

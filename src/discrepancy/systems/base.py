@@ -59,3 +59,16 @@ def check_physical_parameters(params, *, may_be_zero=("k1", "k2")) -> None:
             raise ParameterError(f"{type(params).__name__}.{f.name} must be a finite number "
                                  f"{bound}; got {value!r}")
         object.__setattr__(params, f.name, float(value))
+
+
+def scaled_parameters(params, factors):
+    """A copy of the frozen dataclass ``params`` with each named field multiplied by
+    ``factors[name]`` (a mapping); ParameterError names unknown fields."""
+    from dataclasses import fields, replace
+
+    valid = [f.name for f in fields(params)]
+    unknown = set(factors) - set(valid)
+    if unknown:
+        raise ParameterError(f"factors has unknown parameter names {sorted(unknown)}; valid: "
+                             f"{valid}")
+    return replace(params, **{k: getattr(params, k) * float(v) for k, v in factors.items()})

@@ -2,7 +2,8 @@
 
 State ``x = [phi1, phi2, s, dphi1, dphi2, ds]``: link angles (rad) measured from
 upright (0 up, pi hanging), cart position ``s`` (m) and their rates; input
-``u = s''`` (m/s^2). The equations are derived with sympy from the Lagrangian of
+``u`` (m/s^2): the cart accelerates as ``s'' = gain u`` (``gain`` = 1 by default, a motor
+gain to get wrong in a model). The equations are derived with sympy from the Lagrangian of
 the two links on the moving base, with centres of mass at
 ``(s + a1 sin phi1, a1 cos phi1)`` and ``(s + l1 sin phi1 + a2 sin phi2,
 l1 cos phi1 + a2 cos phi2)`` and viscous joint friction (Rayleigh function
@@ -14,16 +15,16 @@ cart's acceleration to ``0.95 u``; the angle accelerations still see the true
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields, replace
-from functools import lru_cache
+from dataclasses import asdict, dataclass, fields
+from functools import lru_cache, partial
 
 import numpy as np
 import sympy as sp
 
 from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import compile_numpy, symbol
-from .base import PAPER_TABLE_1, System, check_physical_parameters
-from .mechanics import lagrange_equations
+from .base import PAPER_TABLE_1, System, check_physical_parameters, scaled_parameters
+from .mechanics import lagrange_equations, time_derivative
 
 STATE_NAMES = ("phi1", "phi2", "s", "dphi1", "dphi2", "ds")
 INPUT_NAMES = ("u",)
@@ -35,7 +36,8 @@ class CartPendulumParameters:
 
     ``m``: link masses (kg); ``a``: joint-to-centre-of-mass distances (m);
     ``I``: link inertias about their centres of mass (kg m^2); ``l``: link
-    lengths (m); ``k``: viscous joint friction (N m s); ``g`` (m/s^2).
+    lengths (m); ``k``: viscous joint friction (N m s); ``g`` (m/s^2); ``gain``: cart
+    acceleration per unit input (1: the input is the acceleration).
     """
 
     m1: float = PAPER_TABLE_1["m1"]
@@ -49,17 +51,14 @@ class CartPendulumParameters:
     k1: float = PAPER_TABLE_1["k1"]
     k2: float = PAPER_TABLE_1["k2"]
     g: float = PAPER_TABLE_1["g"]
+    gain: float = 1.0
 
     def __post_init__(self):
         check_physical_parameters(self)
 
     def scaled(self, factors) -> CartPendulumParameters:
         """A copy with each parameter multiplied by ``factors[name]`` (a mapping)."""
-        unknown = set(factors) - {f.name for f in fields(self)}
-        if unknown:
-            raise ParameterError(f"factors has unknown parameter names {sorted(unknown)}; valid: "
-                                 f"{[f.name for f in fields(self)]}")
-        return replace(self, **{k: getattr(self, k) * float(v) for k, v in factors.items()})
+        return scaled_parameters(self, factors)
 
 
 @lru_cache(maxsize=1)
@@ -70,9 +69,7 @@ def _derived():
     par = {f.name: sp.Symbol(f.name, positive=True) for f in fields(CartPendulumParameters)}
     m1, m2, a1, a2, I1, I2, l1 = (par[k] for k in ("m1", "m2", "a1", "a2", "I1", "I2", "l1"))
     q, dq = [p1, p2, s], [d1, d2, ds]
-
-    def rate(e):
-        return sum(sp.diff(e, qi) * dqi for qi, dqi in zip(q, dq, strict=True))
+    rate = partial(time_derivative, q=q, dq=dq)
 
     x1, y1 = s + a1 * sp.sin(p1), a1 * sp.cos(p1)
     x2, y2 = s + l1 * sp.sin(p1) + a2 * sp.sin(p2), l1 * sp.cos(p1) + a2 * sp.cos(p2)
@@ -81,7 +78,7 @@ def _derived():
     potential = par["g"] * (m1 * y1 + m2 * y2)
     rayleigh = (par["k1"] * d1 ** 2 + par["k2"] * (d2 - d1) ** 2) / 2
     _, mass, rest = lagrange_equations(kinetic, potential, q, dq, dissipation=rayleigh,
-                                       driven={2: u})
+                                       driven={2: par["gain"] * u})
     return par, mass, rest, sp.expand(kinetic + potential)
 
 
@@ -134,7 +131,8 @@ class DoublePendulumOnCart(System):
         states = [symbol(n) for n in STATE_NAMES]
         inputs = [symbol(n) for n in INPUT_NAMES]
         dd1, dd2 = _cramer(mass[0, 0], mass[0, 1], mass[1, 1], rest[0], rest[1])
-        return states, inputs, list(par.values()), [*states[3:], dd1, dd2, inputs[0]]
+        return states, inputs, list(par.values()), [*states[3:], dd1, dd2,
+                                                    par["gain"] * inputs[0]]
 
     def equations(self):
         """``(states, inputs, rhs)``: sympy symbols named as ``state_names`` / ``input_names``
@@ -143,21 +141,23 @@ class DoublePendulumOnCart(System):
         inputs = [symbol(n) for n in INPUT_NAMES]
         mass, rest, _ = self._matrices()
         dd1, dd2 = _cramer(mass[0, 0], mass[0, 1], mass[1, 1], rest[0], rest[1])
-        return states, inputs, [states[3], states[4], states[5], dd1, dd2, inputs[0]]
+        gain = self.parameters.gain
+        return states, inputs, [states[3], states[4], states[5], dd1, dd2,
+                                inputs[0] if gain == 1 else sp.Float(gain, 17) * inputs[0]]
 
     def flawed_equations(self):
         """``(states, inputs, rhs)`` of the paper's flawed model: ``(phi1)' = dphi1 + sin(phi1)``
-        and ``(ds)' = 0.95 u``, everything else as in :meth:`equations`."""
+        and ``(ds)' = 0.95 u`` (0.95 ``gain u``), everything else as in :meth:`equations`."""
         states, inputs, rhs = self.equations()
         rhs = list(rhs)
         rhs[0] = rhs[0] + sp.sin(states[0])
-        rhs[5] = sp.Float(0.95) * inputs[0]
+        rhs[5] = sp.Float(0.95) * rhs[5]
         return states, inputs, rhs
 
     def discrepancy_equations(self):
-        """The exact discrepancy ``true - flawed``: ``[-sin(phi1), 0, 0, 0, 0, 0.05 u]``."""
-        states, inputs, _ = self.equations()
-        return [-sp.sin(states[0]), 0, 0, 0, 0, sp.Float(0.05) * inputs[0]]
+        """The exact discrepancy ``true - flawed``: ``[-sin(phi1), 0, 0, 0, 0, 0.05 gain u]``."""
+        states, _, rhs = self.equations()
+        return [-sp.sin(states[0]), 0, 0, 0, 0, sp.Float(0.05) * rhs[5]]
 
     # -- numeric ------------------------------------------------------------------------------
     def _numeric(self):
@@ -188,7 +188,8 @@ class DoublePendulumOnCart(System):
         x, u, z = self._stack(x, u)
         parts, _ = self._numeric()
         dd1, dd2 = _cramer(*(f(z) for f in parts))
-        return np.column_stack([x[:, 3], x[:, 4], x[:, 5], dd1, dd2, u[:, 0]])
+        return np.column_stack([x[:, 3], x[:, 4], x[:, 5], dd1, dd2,
+                                self.parameters.gain * u[:, 0]])
 
     def flawed_model(self):
         """The paper's flawed model as a vectorised callable ``f_m(x, u) -> (m, 6)``."""

@@ -205,7 +205,7 @@ def run(out_dir, *, quick: bool = False, verbose=None):
     sens = {"hybrid_plan_paper_cost": sensitivity(f_hybrid, hybrid_plan, coefficient_error),
             "hybrid_plan_min_effort": sensitivity(f_hybrid, effort_plan, coefficient_error)}
     study = robustness_study(strategies, n_cases=5 if quick else 50, seed=2024,
-                             x_hang=X_HANG)
+                             x_hang=X_HANG, rail=RAIL)
 
     rep.results.update(identification=ident,
                        plans={k: plan_summary(p, m) for k, (p, m) in plans.items()},

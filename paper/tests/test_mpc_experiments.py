@@ -1,0 +1,105 @@
+"""The constrained MPC campaigns end to end (quick modes): what the issue asks them to show."""
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from discrepancy_paper.experiments import get_experiment
+
+CONTROLLERS = ["flawed + TVLQR", "hybrid + TVLQR", "hybrid + MPC",
+               "hybrid + MPC + re-identification"]
+
+
+def reproduce(name, tmp_path_factory):
+    out = get_experiment(name)(tmp_path_factory.mktemp(name), quick=True)
+    return out, json.loads((out / "results.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def cart(tmp_path_factory):
+    return reproduce("cart-mpc", tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def grid(tmp_path_factory):
+    return reproduce("cart-leaderboard", tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def single(tmp_path_factory):
+    return reproduce("pendulum-cart-mpc", tmp_path_factory)
+
+
+@pytest.mark.slow
+def test_cart_mpc_writes_its_figures_and_animation(cart):
+    out, res = cart
+    for name in ["report.md", "nominal_runs.png", "solve_times.png", "learning.png",
+                 "leaderboard.png"]:
+        assert (out / name).stat().st_size > 1000, name
+    with Image.open(out / "mpc_swingup.gif") as gif:
+        assert gif.n_frames > 60   # 4 s at 20 frames per second
+    assert res["settings"]["rail_m"] == 0.5 and res["experiment"] == "cart-mpc"
+
+
+@pytest.mark.slow
+def test_cart_hybrid_mpc_swings_up_within_the_limits_where_the_flawed_model_fails(cart):
+    _, res = cart
+    runs = res["nominal_runs"]
+    assert runs["hybrid + MPC"]["success"] and runs["hybrid + MPC"]["max_abs_s"] <= 0.501
+    assert runs["hybrid + MPC"]["max_rate_ratio"] <= 1 + 1e-6
+    assert not runs["flawed + TVLQR"]["success"] and not runs["flawed + MPC"]["success"]
+    ident = res["identification"]
+    assert ident["sin_phi1_coefficient"] == pytest.approx(-1.0, rel=0.03)
+    assert ident["u_coefficient"] == pytest.approx(0.05, rel=0.2)
+    study = res["perturbed_cases"]
+    n = study["n_cases"]
+    assert study["success_counts"]["hybrid + MPC"] == n
+    assert study["success_counts"]["flawed + TVLQR"] == 0
+    for case in study["cases"]:   # success is never claimed off the rail
+        for c in CONTROLLERS:
+            assert not case[c]["success"] or case[c]["max_abs_s"] <= 0.501
+    for plan in res["plans"].values():
+        assert plan["ipopt_status"] == "Solve_Succeeded" and plan["max_abs_s_m"] <= 0.5 + 1e-6
+        assert plan["max_abs_du_dt"] <= 500 * (1 + 1e-6) and plan["max_abs_u"] <= 20 + 1e-6
+
+
+@pytest.mark.slow
+def test_cart_learning_from_the_flawed_model_records_each_attempt(cart):
+    _, res = cart
+    nominal = res["learning_from_flawed_model"]["nominal system"]
+    assert nominal["attempts_to_success"] is not None and nominal["attempts_to_success"] >= 2
+    rows = nominal["coefficients_after_each_attempt"]
+    assert not rows[0]["success"] and rows[-1]["success"]
+    learned = rows[0]["coefficients_after"]
+    assert learned["phi1"]["sin(phi1)"] == pytest.approx(-1.0, rel=0.05)
+    assert res["mpc_solve_time"]["nominal_run_wall"]["samples"] == 200
+
+
+@pytest.mark.slow
+def test_leaderboard_maps_agree_with_its_cells(grid):
+    out, res = grid
+    assert (out / "success_maps.png").stat().st_size > 1000
+    cells = res["grid"]["cells"]
+    assert len(cells) == res["grid"]["n_cells"] == 2
+    for c in CONTROLLERS:
+        assert res["grid"]["success_counts"][c] == sum(r[c]["success"] for r in cells)
+        flat = np.concatenate([np.ravel(m) for m in res["success_maps"][c].values()])
+        assert flat.sum() == res["grid"]["success_counts"][c]
+    assert all(not r["flawed + TVLQR"]["success"] for r in cells)
+    assert all(r["hybrid + MPC + re-identification"]["success"] for r in cells)
+
+
+@pytest.mark.slow
+def test_single_pendulum_campaign_learns_the_exact_terms_and_succeeds(single):
+    out, res = single
+    assert (out / "nominal_runs.png").stat().st_size > 1000
+    exact = res["exact_coefficients"]
+    learned = res["learned_from_flawed_attempt"]
+    assert learned["ds"]["u"] == pytest.approx(exact["u in (ds)'"], rel=0.05)
+    assert learned["dphi"]["cos(phi) u"] == pytest.approx(exact["cos(phi) u in (dphi)'"],
+                                                          rel=0.1)
+    assert res["nominal_runs"]["hybrid + MPC"]["success"]
+    assert not res["nominal_runs"]["flawed + TVLQR"]["success"]
+    study = res["perturbed_cases"]
+    assert study["success_counts"]["hybrid + MPC"] == study["n_cases"] == 3

@@ -1,0 +1,214 @@
+"""Nonlinear model predictive control on a (hybrid) model: CasADi Opti, IPOPT, warm starts.
+
+At every sample the controller solves, by direct multiple shooting over ``horizon`` hold
+intervals of ``dt`` (``substeps`` RK4 steps each, as the planner),
+
+    min  Σ_j (x_j - r_j)ᵀ Q (x_j - r_j) + (u_j - v_j)ᵀ R (u_j - v_j)
+         + (x_N - r_N)ᵀ P (x_N - r_N) + ρ Σ (σ + σ²)
+    s.t. x_0 = measured state, x_{j+1} = step(x_j, u_j),
+         input bounds, |u_j - u_{j-1}| <= du_max dt (u_{-1}: the input applied last),
+         state bounds widened by slacks σ >= 0 (soft, so a noisy measurement past a bound
+         never makes the problem infeasible),
+
+with ``r``, ``v`` a window of the reference (a plan, then its final state held) and ``P``
+the tracking LQR's cost-to-go at the window's end. The problem is built once
+(:meth:`casadi.Opti.to_function`); each solve starts from the previous solution shifted
+by one sample. ``max_iter`` caps IPOPT's iterations: a small fixed number is a real-time
+mode whose cost per sample is bounded.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ParameterError, ShapeError
+from .dynamics import as_casadi, rk4_step
+from .limits import Limits
+from .tracking import _diag, tvlqr
+from .trajectory import Plan
+
+
+class MPC:
+    """Nonlinear MPC controller on ``model`` (see the module docstring for the problem).
+
+    Args:
+        model: the prediction model (anything :func:`~.dynamics.as_casadi` accepts: a
+            fitted hybrid model, sympy equations, a CasADi Function).
+        dt: control period = hold interval (s); horizon: prediction intervals ``N`` (>= 2).
+        Q, R: stage weights (diagonal entries or matrices); default identity and 1.
+        limits: a :class:`~.limits.Limits`: input bounds and rates hard, state bounds soft.
+        substeps: RK4 steps per interval in the prediction.
+        soft_penalty: ``ρ``, weight of the state-bound slacks (per unit of excess).
+        max_iter, tol: IPOPT's iteration cap and tolerance per sample.
+    """
+
+    def __init__(self, model, *, dt: float, horizon: int = 25, Q=None, R=1.0,
+                 limits: Limits | None = None, substeps: int = 2, soft_penalty: float = 1e4,
+                 max_iter: int = 100, tol: float = 1e-6):
+        f = as_casadi(model)
+        n, r = f.size1_in(0), f.size1_in(1)
+        if not (isinstance(horizon, int) and horizon >= 2):
+            raise ParameterError(f"horizon must be an integer >= 2 intervals; got {horizon!r}")
+        if not (np.isfinite(dt) and dt > 0):
+            raise ParameterError(f"dt must be a positive time step (s); got {dt!r}")
+        if not (isinstance(max_iter, int) and max_iter >= 1):
+            raise ParameterError(f"max_iter must be a positive integer; got {max_iter!r}")
+        self.n, self.r, self.dt, self.horizon = n, r, float(dt), horizon
+        self.Q, self.R = _diag("Q", np.ones(n) if Q is None else Q, n), _diag("R", R, r)
+        self.limits = Limits() if limits is None else limits
+        self.substeps, self.max_iter = substeps, max_iter
+        self._model = model
+        self._function = self._build(f, soft_penalty, tol)
+
+    def _build(self, f, soft_penalty, tol):
+        n, r, N = self.n, self.r, self.horizon
+        xl, xu, ul, uu, du = self.limits.sized(n, r)
+        bounded = [i for i in range(n) if np.isfinite(xl[i]) or np.isfinite(xu[i])]
+        opti = ca.Opti()
+        X, U = opti.variable(n, N + 1), opti.variable(r, N)
+        S = opti.variable(max(len(bounded), 1), N)
+        x0, u_prev = opti.parameter(n), opti.parameter(r)
+        Xr, Ur, P = opti.parameter(n, N + 1), opti.parameter(r, N), opti.parameter(n, n)
+        step = rk4_step(f, self.dt, self.substeps).map(N, "serial")
+        opti.subject_to(X[:, 0] == x0)
+        opti.subject_to(X[:, 1:] == step(X[:, :-1], U))
+        for i in range(r):
+            if np.isfinite(ul[i]) or np.isfinite(uu[i]):
+                opti.subject_to(opti.bounded(ul[i], U[i, :], uu[i]))
+            if np.isfinite(du[i]):
+                d = du[i] * self.dt
+                opti.subject_to(opti.bounded(-d, ca.horzcat(U[i, 0] - u_prev[i],
+                                                            ca.diff(U[i, :], 1, 1)), d))
+        opti.subject_to(ca.vec(S) >= 0)
+        for j, i in enumerate(bounded):
+            if np.isfinite(xl[i]):
+                opti.subject_to(X[i, 1:] + S[j, :] >= xl[i])
+            if np.isfinite(xu[i]):
+                opti.subject_to(X[i, 1:] - S[j, :] <= xu[i])
+        E, V = X - Xr, U - Ur
+        J = ca.sum2(ca.sum1(E[:, :-1] * (ca.DM(self.Q) @ E[:, :-1]))) \
+            + ca.sum2(ca.sum1(V * (ca.DM(self.R) @ V))) + ca.bilin(P, E[:, -1], E[:, -1]) \
+            + soft_penalty * (ca.sum1(ca.sum2(S)) + ca.sumsqr(S))
+        opti.minimize(J)
+        opti.solver("ipopt", {"print_time": False, "ipopt.sb": "yes", "expand": False,
+                              "error_on_fail": False},
+                    {"print_level": 0, "max_iter": self.max_iter, "tol": tol,
+                     "acceptable_tol": 1e-4, "mu_init": 1e-3,
+                     "warm_start_init_point": "yes"})
+        self._slacks = S.shape
+        return opti.to_function("mpc", [x0, u_prev, Xr, Ur, P, X, U, S, opti.lam_g],
+                                [X, U, S, opti.lam_g, J])
+
+    def solve(self, x, x_ref, u_ref, *, u_prev=None, P=None, warm=None) -> MPCSolution:
+        """One MPC solve from the measured state ``x`` ``(n,)``.
+
+        Args:
+            x_ref: ``(N+1, n)`` reference states; u_ref: ``(N, r)`` reference inputs.
+            u_prev: ``(r,)`` input applied during the last interval (rate limit; default 0).
+            P: ``(n, n)`` terminal weight (default ``Q``).
+            warm: the previous :class:`MPCSolution`, shifted by one sample as initial guess
+                (default: the reference).
+        """
+        N, n, r = self.horizon, self.n, self.r
+        x_ref, u_ref = np.asarray(x_ref, dtype=float), np.asarray(u_ref, dtype=float)
+        if x_ref.shape != (N + 1, n) or u_ref.shape != (N, r):
+            raise ShapeError(f"x_ref must be ({N + 1}, {n}) and u_ref ({N}, {r}); got "
+                             f"{x_ref.shape} and {u_ref.shape}")
+        u_prev = np.zeros(r) if u_prev is None else np.asarray(u_prev, dtype=float).ravel()
+        P = self.Q if P is None else P
+        if warm is None:
+            xg, ug, sg, lg = x_ref.T, u_ref.T, np.zeros(self._slacks), 0.0
+        else:
+            xg = np.hstack([warm.x[1:].T, warm.x[-1:].T])
+            ug = np.hstack([warm.u[1:].T, warm.u[-1:].T])
+            sg, lg = np.zeros(self._slacks), warm.multipliers
+        start, cpu = time.perf_counter(), time.process_time()
+        X, U, S, L, J = self._function(x, u_prev, x_ref.T, u_ref.T, P, xg, ug, sg, lg)
+        elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
+        stats = self._function.stats()
+        return MPCSolution(x=np.array(X).T, u=np.array(U).reshape(r, N).T,
+                           slack=float(np.max(np.array(S), initial=0.0)), objective=float(J),
+                           multipliers=np.array(L), solve_time=elapsed, cpu_time=cpu,
+                           iterations=int(stats.get("iter_count", -1)),
+                           success=bool(stats.get("success", False)))
+
+    def follow(self, plan: Plan, *, tracker=None, u_final=None) -> MPCLaw:
+        """A law ``law(k, x) -> u`` for :func:`~.closed_loop.closed_loop`: track ``plan``
+        (same ``dt``), then hold its final state. Terminal weights: the cost-to-go of the
+        TVLQR tracker of ``plan`` on this model with these ``Q``, ``R`` (``tracker``, computed
+        if not given), which balances about the plan's end after it."""
+        if abs(plan.dt - self.dt) > 1e-9 * self.dt:
+            raise ParameterError(f"plan.dt must equal the controller's dt {self.dt}; got "
+                                 f"{plan.dt}")
+        if tracker is None:
+            tracker = tvlqr(self._model, plan, Q=self.Q, R=self.R, Q_final="lqr",
+                            u_final=u_final)
+        return MPCLaw(self, plan, tracker)
+
+
+@dataclass(frozen=True)
+class MPCSolution:
+    """One MPC solve: predicted states ``x`` ``(N+1, n)`` and inputs ``u`` ``(N, r)`` (``u[0]``
+    is applied), largest state-bound slack, objective, IPOPT multipliers (for the next warm
+    start), wall and CPU time (s), iterations and whether IPOPT converged."""
+
+    x: np.ndarray
+    u: np.ndarray
+    slack: float
+    objective: float
+    multipliers: np.ndarray
+    solve_time: float
+    cpu_time: float
+    iterations: int
+    success: bool
+
+
+@dataclass
+class MPCLaw:
+    """``law(k, x) -> u``: MPC along a plan (reference window from sample ``k``), warm-started
+    from its own last solution. Records every solve: ``solve_times`` and ``cpu_times`` (s),
+    ``iterations``, ``converged``."""
+
+    mpc: MPC
+    plan: Plan
+    tracker: object
+    solve_times: list = field(default_factory=list)
+    cpu_times: list = field(default_factory=list)
+    iterations: list = field(default_factory=list)
+    converged: list = field(default_factory=list)
+    _last: MPCSolution | None = None
+    _u: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Forget the warm start, the last input and the records (a new run)."""
+        self._last, self._u = None, None
+        self.solve_times, self.cpu_times, self.iterations, self.converged = [], [], [], []
+
+    def window(self, k: int):
+        """``(x_ref (N+1, n), u_ref (N, r), P (n, n))`` from sample ``k``."""
+        N, M = self.mpc.horizon, len(self.plan.u)
+        idx = np.minimum(np.arange(k, k + N + 1), M)
+        uidx = np.arange(k, k + N)
+        u_end = self.tracker.u_final if self.tracker.u_final is not None else \
+            np.zeros(self.mpc.r)
+        u_ref = np.where((uidx < M)[:, None], self.plan.u[np.minimum(uidx, M - 1)], u_end)
+        P = self.tracker.cost_to_go[min(k + N, M)]
+        return self.plan.x[idx], u_ref, P
+
+    def __call__(self, k: int, x) -> np.ndarray:
+        x_ref, u_ref, P = self.window(k)
+        sol = self.mpc.solve(np.asarray(x, dtype=float), x_ref, u_ref, u_prev=self._u, P=P,
+                             warm=self._last)
+        self._last, self._u = sol, sol.u[0]
+        self.solve_times.append(sol.solve_time)
+        self.cpu_times.append(sol.cpu_time)
+        self.iterations.append(sol.iterations)
+        self.converged.append(sol.success)
+        return sol.u[0]
+
+    def notify_applied(self, u) -> None:
+        """The input actually applied (after an actuator's saturation), for the rate limit."""
+        self._u = np.asarray(u, dtype=float).ravel()
