@@ -109,6 +109,7 @@ def _no_paper_package(args) -> int:
 
 def cmd_fit(args) -> None:
     from . import DiscrepancyModel
+    from .errors import ParameterError
     from .io import load
 
     data = load(args.data, states=args.states.split(",") if args.states else None,
@@ -118,6 +119,11 @@ def cmd_fit(args) -> None:
         feature_library=args.library, optimizer=args.optimizer,
         differentiation_method=args.differentiation,
         state_names=data.state_names, input_names=data.input_names or None)
+    if args.dt is not None and (not np.isfinite(args.dt) or args.dt <= 0):
+        raise ParameterError(f"--dt must be a positive time step; got {args.dt}")
+    if args.dt is not None and data.t is not None:
+        raise ParameterError(f"--dt {args.dt} was given but {args.data} has a time column "
+                             "'t'; give one or the other")
     t = data.t if data.t is not None else args.dt
     model.fit(data.x, t=t, u=data.u)
     model.print()

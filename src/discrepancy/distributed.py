@@ -51,7 +51,7 @@ def _block(rows, x, *rest, setup, step, halo, n_total, trajectory, offset):
     z, y, xd = (a[lo:hi] for a in setup.rows(Trajectory(t, x, u, xd)))
     stats = setup.new_statistics()
     stats.count = offset + int(rows[lo])  # the data row of this block's first row (folds)
-    acc = BlockAccumulator(setup.transform, stats, n_threads=1)
+    acc = BlockAccumulator(setup.transform, stats, n_threads=1, names=setup.names)
     acc.add(z, y, xd)
     acc.finish_trajectory()
     stats.count -= offset + int(rows[lo])

@@ -13,8 +13,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ..errors import ConvergenceError, ParameterError, ShapeError
+from ..constraints import Integral, Interval, Real, validate_params
+from ..data.validation import check_array, check_times
+from ..errors import ConvergenceError, ParameterError, ShapeError, describe
+from ..resources import check_memory, n_bytes
 
+REPLAY_CONSTRAINTS = {"samples": [Interval(Integral, 1)],
+                      "rtol": [Interval(Real, 0, closed="neither")],
+                      "atol": [Interval(Real, 0, closed="neither")]}
 #: Default success of reaching an upright target (angles 0): angles within 0.05 rad, rates 0.2.
 ANGLE_TOL = 0.05
 RATE_TOL = 0.2
@@ -114,14 +120,19 @@ def replay(model, x0, t, law, *, samples=1, rtol=1e-12, atol=1e-14) -> Run:
         samples: output samples per interval (for plots and identification).
         rtol, atol: ODE tolerances.
     """
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or len(t) < 2 or np.any(np.diff(t) <= 0):
-        raise ShapeError(f"t must be increasing grid times (N+1,); got shape {t.shape}")
+    validate_params("replay", {"samples": samples, "rtol": rtol, "atol": atol},
+                    REPLAY_CONSTRAINTS)
+    if np.ndim(t) != 1 or np.size(t) < 2:
+        raise ShapeError(f"t must be increasing grid times (N+1,); got {describe(t)}")
+    t = check_times("t", t, np.size(t))
     dts = np.diff(t)
     if np.ptp(dts) > 1e-9 * dts[0]:
         raise ParameterError("t must be uniformly spaced (a plan's grid)")
-    x0 = np.asarray(x0, dtype=float).ravel()
+    x0 = check_array("x0", np.reshape(x0, (1, -1)))[0]
     n_int = len(t) - 1
+    check_memory(f"the replay's dense output ({n_int} intervals x {samples + 1} samples x "
+                 f"{len(x0)} states)", n_bytes((n_int, samples + 1, len(x0))),
+                 "Ask for fewer samples per interval")
     if callable(law):
         feedback, table = law, None
     else:

@@ -112,6 +112,9 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None) -> list[T
         xdi = None if xds[i] is None else as_2d(f"x_dot{tag}", xds[i], n_rows=m, n_cols=n,
                                                 allow_1d=True)
         out.append(Trajectory(ti, xi, ui, xdi, check_weight(f"sample_weight{tag}", ws[i], m)))
+    if sample_weight is not None and not any(np.any(tr.weight > 0) for tr in out):
+        raise DataError("sample_weight must have at least one positive weight; all are 0, "
+                        "which leaves nothing to fit")
     return out
 
 

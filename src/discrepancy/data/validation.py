@@ -58,7 +58,7 @@ def check_finite(name: str, a: np.ndarray, *, where: str | None = None,
         at = f" at row {index[0]}" + (f", column {index[1]}" if len(index) > 1 else "")
     raise DataError(f"{_place(where)}{name} must be finite; found {a[tuple(index)]}{at} "
                     f"({int(bad.sum())} non-finite values{' in this chunk' if where else ''}). "
-                    "Nothing was fitted; clean or drop those rows first")
+                    "Clean or drop those rows first")
 
 
 def check_array(name: str, a, *, n_rows: int | None = None, n_cols: int | None = None,

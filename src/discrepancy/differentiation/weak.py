@@ -55,6 +55,13 @@ class WeakForm(Differentiator):
     def data_driven(self) -> bool:
         return self.window_length is None
 
+    @property
+    def sample_rows(self) -> int:
+        """Rows the automatic window is chosen from (those of ``"auto"``), also when streamed."""
+        from .auto import AutoSmoothing
+
+        return AutoSmoothing().sample_rows
+
     def choose(self, series) -> tuple[WeakForm, dict]:
         """A weak form with the window chosen from data ``series`` (list of ``(t, x)``)."""
         from .auto import AutoSmoothing

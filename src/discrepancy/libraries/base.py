@@ -16,6 +16,7 @@ import sympy as sp
 from ..base import Estimator
 from ..constraints import InstanceOf, Predicate
 from ..errors import NotFittedError, ParameterError, ShapeError, UnknownNameError
+from ..resources import check_features
 from ..symbolic import feature_name, symbol
 
 #: ``variables=``: ``None`` (all) or a list of names / indices into ``z = [x, u]``
@@ -87,6 +88,7 @@ class FeatureLibrary(Estimator, ABC):
         if not expressions:
             raise ParameterError(f"{self!r} produces no features for variables {list(names)}; "
                                  "the library must have at least one column")
+        check_features(repr(self), len(expressions))
         self.names_ = list(names)
         self.feature_expressions_ = expressions
         self.n_features_ = len(expressions)
@@ -127,6 +129,9 @@ class BaseLibrary(FeatureLibrary):
     def fit(self, names: Sequence[str]) -> BaseLibrary:
         self._validate_params()
         self._index = self._select(names)
+        count = self._n_features(len(self._index))
+        if count is not None:  # counted before any expression is built
+            check_features(f"{self!r} of {len(self._index)} variables", count)
         symbols = [symbol(names[i]) for i in self._index]
         self._bind(names, self._expressions(symbols))
         return self
@@ -140,6 +145,11 @@ class BaseLibrary(FeatureLibrary):
     def _evaluate_into(self, Zs: np.ndarray, out: np.ndarray) -> np.ndarray:
         out[...] = self._evaluate(Zs)
         return out
+
+    def _n_features(self, k: int) -> int | None:
+        """Hook: the number of columns on ``k`` variables, counted without building them
+        (``None``: no faster than building them)."""
+        return None
 
     @abstractmethod
     def _expressions(self, symbols: list[sp.Symbol]) -> list[sp.Expr]:
@@ -205,6 +215,7 @@ class TensorLibrary(FeatureLibrary):
         self._validate_params()
         a = self.left.fit(names).feature_expressions_
         b = self.right.fit(names).feature_expressions_
+        check_features(repr(self), len(a) * len(b))
         exprs = [ea * eb for ea in a for eb in b]
         self._keep = _unique(exprs)
         self._bind(names, [exprs[i] for i in self._keep])

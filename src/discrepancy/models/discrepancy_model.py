@@ -163,6 +163,9 @@ class DiscrepancyModel(Estimator):
                              f"has {setup.n_features} and {setup.n_states}")
         if stats.count == 0:
             raise DataError("stats hold no samples: nothing to fit")
+        if not np.any(stats.gram):
+            raise DataError("the statistics are all zero: every sample has weight 0 or every "
+                            "library column is 0 on these data; nothing to fit")
         optimizer = copy.deepcopy(setup.optimizer)
         optimizer.fit_statistics(stats)
         self._set_fit(setup, optimizer.coef_, optimizer, stats)
@@ -188,6 +191,22 @@ class DiscrepancyModel(Estimator):
                                             functions) for j in active]
         self._active_coef = self.coef_[:, active].T
         self._compiled_steps = {}   # CasADi steppers of these coefficients, by substeps
+
+    def _data(self, x, t=None, u=None, x_dot=None, sample_weight=None) -> list[Trajectory]:
+        """Validated trajectories with the columns this fitted model has (for score and
+        bootstrap): ShapeError naming ``x`` or ``u`` before any work otherwise."""
+        self.check_is_fitted()
+        trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
+        first = trajectories[0]
+        if first.x.shape[1] != self.n_states_:
+            raise ShapeError(f"x must have {self.n_states_} columns (the model's states "
+                             f"{self.state_names_}); got shape {first.x.shape}")
+        r = 0 if first.u is None else first.u.shape[1]
+        if r != self.n_inputs_:
+            raise ShapeError(f"u must have {self.n_inputs_} columns (the model's inputs "
+                             f"{self.input_names_}); got "
+                             f"{'none' if first.u is None else first.u.shape}")
+        return trajectories
 
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(Z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m`` ``(m, n)``."""

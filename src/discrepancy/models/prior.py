@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import sympy as sp
 
-from ..errors import ParameterError, PriorError
+from ..errors import ParameterError, PriorError, describe
 from ..symbolic import adopt, compile_numpy
 
 
@@ -53,10 +53,18 @@ class Prior:
         if self._call is None:
             return np.zeros_like(x)
         try:
-            out = np.asarray(self._call(x, u), dtype=float)
+            out = self._call(x, u)
         except Exception as e:
             raise PriorError(f"prior raised {type(e).__name__}: {e} when called with x of shape "
                              f"{x.shape} and u {None if u is None else u.shape}") from e
+        if np.iscomplexobj(out):
+            raise PriorError("prior must return real values; it returned complex ones (the "
+                             "imaginary part would be dropped)")
+        try:
+            out = np.asarray(out, dtype=float)
+        except (TypeError, ValueError) as e:
+            raise PriorError(f"prior must return a numeric array of shape {x.shape}; it "
+                             f"returned {describe(out)} ({e})") from None
         if out.shape != x.shape:
             raise PriorError(f"prior must return an array of shape {x.shape} (same as x); "
                              f"got shape {out.shape}")

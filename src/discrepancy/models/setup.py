@@ -126,8 +126,23 @@ class FitSetup:
 
     def new_statistics(self) -> GramStatistics:
         """Empty statistics of the right size (``p`` features, ``n`` targets), kept per
-        cross-validation fold as well (:data:`N_FOLDS` folds of ``fold_segment`` rows)."""
-        return GramStatistics(self.n_features, self.n_states, N_FOLDS, self.fold_segment)
+        cross-validation fold as well (:data:`N_FOLDS` folds of ``fold_segment`` rows).
+        Raises ResourceError when a fit's statistics would not fit in memory."""
+        from ..accumulate import statistics_bytes
+        from ..resources import SMALLER_LIBRARY, check_memory
+
+        p, n = self.n_features, self.n_states
+        check_memory(f"the Gram statistics of {p} library columns", statistics_bytes(p, n),
+                     SMALLER_LIBRARY + "; they are p x p, so chunked fitting does not help")
+        return GramStatistics(p, n, N_FOLDS, self.fold_segment)
+
+    @property
+    def names(self):
+        """Names of Θ's columns and of the variables, for messages about the data."""
+        from ..accumulate import Names
+
+        variables = [] if isinstance(self.differentiation, WeakForm) else self.variable_names
+        return Names(self.library.get_feature_names(), variables)
 
     def statistics(self, trajectory: Trajectory, *,
                    into: GramStatistics | None = None) -> GramStatistics:
@@ -141,7 +156,7 @@ class FitSetup:
         stats = self.new_statistics() if into is None else into
         z, y, x_dot = self.rows(trajectory)
         weight = None if trajectory.weight is None else trajectory.weight[:len(z)]
-        return accumulate(stats, self.transform, z, y, x_dot, weight)
+        return accumulate(stats, self.transform, z, y, x_dot, weight, names=self.names)
 
 
 def _copy_into(theta: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarray:

@@ -22,6 +22,8 @@ from .inputs import input_law, stage_inputs
 
 ADAPTIVE = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 METHODS = (*ADAPTIVE, "rk4")
+#: options passed on to scipy's adaptive solvers
+SOLVER_OPTIONS = ("first_step", "max_step", "min_step", "jac", "jac_sparsity", "lband", "uband")
 #: right-hand-side evaluations allowed per output sample (and at least MIN_EVALUATIONS)
 EVALUATIONS_PER_SAMPLE = 500
 MIN_EVALUATIONS = 100_000
@@ -33,7 +35,13 @@ class _Stop(Exception):
         self.why, self.time, self.state = why, float(time), np.asarray(state, float).copy()
 
 
-def _check_options(method, rtol, atol, substeps, max_evaluations):
+def _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws):
+    unknown = sorted(set(solver_kws) - set(SOLVER_OPTIONS if method in ADAPTIVE else ()))
+    if unknown:
+        raise ParameterError(f"simulate got unknown option(s) {unknown} for method "
+                             f"{method!r}; valid: method, rtol, atol, u_hold, substeps, "
+                             f"max_evaluations, compiled, {', '.join(SOLVER_OPTIONS)} (the last "
+                             "ones for adaptive methods)")
     if method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     for name, value in (("rtol", rtol), ("atol", atol)):
@@ -44,6 +52,7 @@ def _check_options(method, rtol, atol, substeps, max_evaluations):
             not 1 <= substeps <= 10_000:
         raise ParameterError(f"substeps must be an integer in [1, 10000]; got {substeps!r}")
     if max_evaluations is not None and (not isinstance(max_evaluations, (int, np.integer))
+                                        or isinstance(max_evaluations, bool)
                                         or max_evaluations < 1):
         raise ParameterError(f"max_evaluations must be a positive integer or None; got "
                              f"{max_evaluations!r}")
@@ -73,7 +82,7 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
         discontinuous dynamics); it says when and where, and ``.partial`` holds the states
         at the output times reached.
     """
-    _check_options(method, rtol, atol, substeps, max_evaluations)
+    _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws)
     x0 = np.asarray(x0, dtype=float).ravel()
     if x0.shape != (n_states,) or not np.all(np.isfinite(x0)):
         raise ShapeError(f"x0 must be {n_states} finite numbers (one per state); "
