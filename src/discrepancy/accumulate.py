@@ -203,13 +203,12 @@ def not_finite(block: np.ndarray, z: np.ndarray, row: int, p: int,
         what = f"library column {names.columns[j]!r}" if j < p else \
             f"the target of equation {j - p} (x_dot - prior)"
         at = names.values(z[i]) if j < p else ""
-        return FeatureError(f"{what} is {block[j, i]} at data row {row + i}{at}: the term "
-                            "is undefined or overflows there. Nothing was fitted; remove the "
-                            "term, or the rows where it is undefined")
+        return FeatureError(f"{what} is {block[j, i]} at row {row + i}{at}: the term is "
+                            "undefined or overflows there (remove the term, or those rows)")
     with np.errstate(over="ignore"):
         j = int(np.argmax(~np.isfinite(np.einsum("ij,ij->i", block, block))))
     what = f"library column {names.columns[j]!r}" if j < p else f"the target of equation {j - p}"
-    return FeatureError(f"{what} overflows: the sum of its squares over data rows {row}.."
+    return FeatureError(f"{what} overflows: the sum of its squares over rows {row}.."
                         f"{row + block.shape[1] - 1} exceeds 1.8e308 (largest magnitude "
                         f"{np.max(np.abs(block[j])):.3g}). Scale the data or use a smaller "
                         "library")

@@ -169,7 +169,8 @@ def cmd_show(args) -> None:
     from . import DiscrepancyModel
 
     doc, callable_prior = _stored(args.model)
-    functions = {name: _placeholder_prior for name in doc.get("user_functions", [])
+    declared = doc.get("user_functions", []) if isinstance(doc, dict) else []
+    functions = {name: _placeholder_prior for name in declared
                  if isinstance(name, str)}  # names only: show evaluates nothing
     model = DiscrepancyModel.from_state(doc, prior=_placeholder_prior if callable_prior
                                         else None, functions=functions)
@@ -182,8 +183,15 @@ def cmd_show(args) -> None:
         print(model.to_latex(precision=max(args.precision, 1), part=part))
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors on one line (exit code 2), like every other error."""
+
+    def error(self, message):
+        self.exit(2, f"error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="discrepancy", epilog=EPILOG,
+    p = _Parser(prog="discrepancy", epilog=EPILOG,
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 description="Learn sparse discrepancy models f_m + g with SINDy.")
     sub = p.add_subparsers(dest="command", required=True)

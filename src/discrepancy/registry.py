@@ -64,6 +64,12 @@ class Registry:
             raise UnknownNameError(f"{self.argument} must be a {self.kind} object or one of "
                                    f"{', '.join(self.names())}; got {describe(spec)}")
         cls = self.get(name)
+        valid = cls._param_defaults()
+        unknown = sorted((set(given) | set(params)) - set(valid))
+        if unknown:
+            raise ParameterError(f"{self.argument} {name!r}: {cls.__name__} has no parameter "
+                                 f"{', '.join(map(repr, unknown))}; valid parameters: "
+                                 f"{', '.join(valid) or 'none'}")
         try:
             obj = cls(**{**given, **params})
         except TypeError as e:

@@ -63,7 +63,10 @@ def adopt(expr, names: Sequence[str], *, label: str) -> sp.Expr:
 
 
 def _number(expr) -> float:
-    return float(expr)
+    value = complex(expr)
+    if value.imag != 0 or not np.isfinite(value.real):
+        raise ExportError(f"the constant {expr} is not a finite real number")
+    return value.real
 
 
 def compile_numpy(expr: sp.Expr, names: Sequence[str],

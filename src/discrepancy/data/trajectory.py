@@ -126,6 +126,6 @@ def check_weight(name: str, weight, m: int, *, where: str | None = None,
     w = check_array(name, np.full(m, weight) if np.ndim(weight) == 0 else weight, ndim=1,
                     n_rows=m, where=where, row_offset=row_offset)
     if np.any(w < 0):
-        raise DataError(f"{name} must be >= 0; found {w[np.argmax(w < 0)]} at row "
-                        f"{row_offset + int(np.argmax(w < 0))}")
+        raise DataError(f"{where + ': ' if where else ''}{name} must be >= 0; found "
+                        f"{w[np.argmax(w < 0)]} at row {row_offset + int(np.argmax(w < 0))}")
     return w

@@ -11,14 +11,16 @@ import numpy as np
 
 from ..errors import DataError, ShapeError, describe
 
-__all__ = ["check_array", "check_times", "is_uniform"]
+__all__ = ["as_float_array", "check_array", "check_times", "check_vector", "is_uniform"]
 
 
 def _place(where: str | None) -> str:
     return f"{where}: " if where else ""
 
 
-def _as_float(name: str, a, where: str | None) -> np.ndarray:
+def as_float_array(name: str, a, where: str | None = None) -> np.ndarray:
+    """Float64 array of any shape from ``a``: ShapeError for non-numbers, DataError for
+    complex or date values (no check of finiteness or shape)."""
     if isinstance(a, (str, bytes)):
         raise ShapeError(f"{_place(where)}{name} must be a numeric array; got {describe(a)}")
     try:
@@ -79,7 +81,7 @@ def check_array(name: str, a, *, n_rows: int | None = None, n_cols: int | None =
         ShapeError for non-numeric input or wrong shapes, DataError for complex, date or
         non-finite values.
     """
-    arr = _as_float(name, a, where)
+    arr = as_float_array(name, a, where)
     if ndim == 2 and arr.ndim == 1 and allow_1d:
         arr = arr[:, None]
     if arr.ndim != ndim:
@@ -101,6 +103,16 @@ def check_array(name: str, a, *, n_rows: int | None = None, n_cols: int | None =
     return arr
 
 
+def check_vector(name: str, a, size: int, *, where: str | None = None) -> np.ndarray:
+    """``size`` finite numbers ``(size,)`` from ``a`` (any shape holding that many, e.g. a
+    state ``(n,)`` or ``(1, n)``)."""
+    arr = as_float_array(name, a, where).reshape(-1)
+    if arr.shape != (size,):
+        raise ShapeError(f"{_place(where)}{name} must be {size} numbers; got {describe(a)}")
+    check_finite(name, arr, where=where)
+    return arr
+
+
 def check_times(name: str, t, m: int, *, where: str | None = None,
                 after: float | None = None, row_offset: int = 0) -> np.ndarray:
     """Times ``(m,)`` from a positive step (a number) or a strictly increasing 1-D array.
@@ -110,7 +122,7 @@ def check_times(name: str, t, m: int, *, where: str | None = None,
     if isinstance(t, (str, bytes, bool, np.bool_)) or (np.ndim(t) == 0 and
                                                        not _is_real_number(t)):
         if np.ndim(t) == 0 and np.asarray(t).dtype.kind in "mM":
-            _as_float(name, t, where)
+            as_float_array(name, t, where)
         raise DataError(f"{_place(where)}{name} must be a positive time step (a number) or an "
                         f"array of {m} times; got {describe(t)}")
     if np.ndim(t) == 0:

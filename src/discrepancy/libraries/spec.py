@@ -40,6 +40,9 @@ def _tokens(spec: str) -> list[str]:
 
 def parse_library(spec: str) -> FeatureLibrary:
     """A library from a spec like ``"poly(3)+fourier(1)"`` or ``"poly(2)*poly(1, u)"``."""
+    if not isinstance(spec, str):
+        raise ParameterError(f"library spec must be text such as 'poly(3)+fourier(1)'; got "
+                             f"{type(spec).__name__}")
     tokens = _tokens(spec)
     pos = 0
 

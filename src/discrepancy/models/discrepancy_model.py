@@ -5,10 +5,12 @@ import copy
 
 import numpy as np
 
+from ..accumulate import Names
 from ..base import Estimator
-from ..constraints import InstanceOf, Predicate, is_callable
+from ..constraints import InstanceOf, Predicate, is_callable, validate_params
 from ..data.chunks import data_kind
 from ..data.trajectory import Trajectory, as_2d, as_trajectories
+from ..data.validation import check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary
@@ -236,12 +238,25 @@ class DiscrepancyModel(Estimator):
         theta = np.column_stack([f(z) for f in self._active_terms])
         return theta @ self._active_coef
 
+    def _checked_g(self, z: np.ndarray) -> np.ndarray:
+        """``g(z)``, or FeatureError naming the first active term that is not finite."""
+        with np.errstate(all="ignore"):
+            g = self._g(z)
+        if not np.all(np.isfinite(g)):
+            from ..accumulate import not_finite
+            active = np.flatnonzero(np.any(self.coef_ != 0, axis=0))
+            theta = np.column_stack([f(z) for f in self._active_terms])
+            names = self.get_feature_names()
+            raise not_finite(theta.T, z, 0, len(active), Names(
+                [names[j] for j in active], self.variable_names_))
+        return g
+
     def discrepancy(self, x, u=None) -> np.ndarray:
         """The learned correction ``g(x, u)``, ``(m, n)`` (a list for a list of ``x``)."""
         if isinstance(x, (list, tuple)):
             return [self.discrepancy(xi, ui) for xi, ui in _pairs(x, u)]
         x, u = self._variables(x, u)
-        return self._g(x if u is None else np.hstack([x, u]))
+        return self._checked_g(x if u is None else np.hstack([x, u]))
 
     def predict(self, x, u=None) -> np.ndarray:
         """Hybrid model derivatives ``f_m(x, u) + g(x, u)``, ``(m, n)``; a list of ``x``
@@ -249,7 +264,7 @@ class DiscrepancyModel(Estimator):
         if isinstance(x, (list, tuple)):
             return [self.predict(xi, ui) for xi, ui in _pairs(x, u)]
         x, u = self._variables(x, u)
-        return self.prior_(x, u) + self._g(x if u is None else np.hstack([x, u]))
+        return self.prior_(x, u) + self._checked_g(x if u is None else np.hstack([x, u]))
 
     @property
     def complexity(self) -> int:
@@ -276,13 +291,17 @@ class DiscrepancyModel(Estimator):
         """
         keywords_only("simulate", args, "u")
         self.check_is_fitted()
+        x0 = check_vector("x0", x0, self.n_states_)
         if self.discrete_time:
             from .discrete import iterate
             return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_)
         if "method" not in integrator_kws and self._has_jumps():
             integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
+        validate_params("simulate", {"compiled": compiled}, {"compiled": [bool]})
         if integrator_kws.get("method") == "rk4" and compiled and not callable(u):
             from .fast_simulation import compiled_stepper
+            from .simulation import check_options
+            check_options(integrator_kws)
             integrator_kws["compiled"] = compiled_stepper(self, x0, u,
                                                           integrator_kws.get("substeps", 4))
         return integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,

@@ -20,7 +20,7 @@ import numpy as np
 import sympy as sp
 
 from .._version import __version__
-from ..errors import DiscrepancyError, ModelFileError, ParameterError
+from ..errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
 from ..symbolic import IDENTIFIER, from_data, to_data
 
 _NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
@@ -107,8 +107,10 @@ def _fail(why: str) -> ModelFileError:
 def read_json(path) -> dict:
     """Parse a model file (size-limited) into a dict; :func:`decode` checks its fields."""
     path = Path(path)
+    if path.is_dir():
+        raise ModelFileError(f"model file {str(path)!r} is a folder, not a file")
     if not path.is_file():
-        raise FileNotFoundError(f"model file {str(path)!r} does not exist")
+        raise MissingFileError(f"model file {str(path)!r} does not exist")
     if path.stat().st_size > MAX_BYTES:
         raise _fail(f"{path.stat().st_size} bytes is more than the {MAX_BYTES} a model file "
                     "may have")
@@ -116,6 +118,8 @@ def read_json(path) -> dict:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise _fail("not UTF-8 text") from None
+    except OSError as e:
+        raise ModelFileError(f"cannot read model file {str(path)!r}: {e.strerror or e}") from None
     try:
         return json.loads(text)
     except json.JSONDecodeError as e:

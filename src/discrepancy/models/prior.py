@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import sympy as sp
 
-from ..errors import ParameterError, PriorError, describe
+from ..errors import ExportError, ParameterError, PriorError, describe
 from ..symbolic import adopt, compile_numpy
 
 
@@ -31,7 +31,7 @@ class Prior:
             self._call = _adapt(prior)
         elif isinstance(prior, (list, tuple, sp.MatrixBase)):
             self.expressions = self._check_expressions(list(prior))
-            compiled = [compile_numpy(e, self.names) for e in self.expressions]
+            compiled = [self._compiled(i, e) for i, e in enumerate(self.expressions)]
             self._call = lambda x, u: np.column_stack(
                 [f(x if u is None else np.hstack([x, u])) for f in compiled])
         else:
@@ -43,6 +43,12 @@ class Prior:
             raise ParameterError(f"prior must have one expression per state ({self.n}); "
                                  f"got {len(exprs)}")
         return [adopt(e, self.names, label=f"prior[{i}]") for i, e in enumerate(exprs)]
+
+    def _compiled(self, i: int, expr: sp.Expr):
+        try:
+            return compile_numpy(expr, self.names)
+        except ExportError as e:
+            raise PriorError(f"prior[{i}] = {expr} cannot be evaluated: {e}") from None
 
     @property
     def is_symbolic(self) -> bool:

@@ -43,7 +43,10 @@ def score(model, x, t=None, u=None, x_dot=None, *, metric="r2") -> float:
     if truth.size == 0:
         raise ShapeError("score needs at least one sample")
     if callable(metric):  # e.g. sklearn.metrics.mean_absolute_error, as PySINDy allows
-        value = metric(truth, pred)
+        try:
+            value = metric(truth, pred)
+        except Exception as e:
+            raise ParameterError(f"metric raised {type(e).__name__}: {e}") from e
         try:
             number = np.nan if isinstance(value, (str, bytes, bool)) or np.ndim(value) \
                 else float(value)

@@ -58,6 +58,19 @@ def _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws):
                              f"{max_evaluations!r}")
 
 
+def check_options(options: dict) -> None:
+    """Check :func:`integrate`'s keyword ``options`` (defaults for those not given) before
+    work that depends on them, such as building a compiled stepper of ``substeps``."""
+    import inspect
+
+    defaults = {k: p.default for k, p in inspect.signature(integrate).parameters.items()
+                if p.default is not p.empty}
+    given = {**defaults, **options}
+    _check_options(given["method"], given["rtol"], given["atol"], given["substeps"],
+                   given["max_evaluations"], {k: v for k, v in options.items()
+                                              if k not in defaults})
+
+
 def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
               method: str = "LSODA", rtol: float = 1e-10, atol: float = 1e-10,
               u_hold: str = "linear", substeps: int = 4, max_evaluations: int | None = None,

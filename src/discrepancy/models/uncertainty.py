@@ -202,7 +202,8 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
 def _check_uncertainty(model, uncertainty) -> None:
     if not isinstance(uncertainty, CoefficientUncertainty) or \
             uncertainty.samples.shape[1:] != model.coef_.shape or \
-            list(uncertainty.feature_names) != model.get_feature_names():
+            list(uncertainty.feature_names) != model.get_feature_names() or \
+            not np.array_equal(uncertainty.estimate, model.coef_):
         raise ParameterError("uncertainty must be this model's bootstrap(...) result "
                              f"(coefficients {model.coef_.shape}); got "
                              f"{type(uncertainty).__name__}")
