@@ -70,6 +70,7 @@ CASES = [
     Case("predict", "list x with an array u", lambda: WITH_U.predict([X[:, :1]], U), raises(ShapeError, r"^u must be a list of 1 arrays")),
     Case("predict", "one state as a flat row for two states", lambda: ROT.predict(np.array([0.1, 0.2])), raises(ShapeError, r"^x must be 2-D")),
     Case("predict", "a term undefined at the point", lambda: LOG.predict(np.array([[-1.0]])), raises(FeatureError, r"library column 'log\(x1\)' is nan at row 0 \(x1 = -1\)")),
+    Case("predict", "a nested list of numbers", lambda: ROT.predict([[0.1, 0.2]]), raises(ShapeError, r"x is a list holding numbers; .*np.array\(x\)")),
     Case("predict", "discrepancy of a string", lambda: ROT.discrepancy("x"), raises(ShapeError, r"^x must be a numeric array")),
     Case("predict", "0 rows give 0 rows", lambda: ROT.predict(np.zeros((0, 2))), returns(lambda v: v.shape == (0, 2))),
     Case("predict", "right values", lambda: CALL.predict(X), returns(exact(XD))),

@@ -90,3 +90,9 @@ def describe(value) -> str:
     if isinstance(value, (list, tuple)):
         return f"{type(value).__name__} of length {len(value)}"
     return repr(value) if isinstance(value, (int, float, str, type(None))) else type(value).__name__
+
+
+def short_repr(text, limit: int = 80) -> str:
+    """``repr(text)`` for messages, cut to ``limit`` characters."""
+    shown = repr(text)
+    return shown if len(shown) <= limit else shown[:limit - 3] + "..."

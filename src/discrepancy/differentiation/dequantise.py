@@ -20,7 +20,7 @@ import numpy as np
 from ..constraints import InstanceOf, Integral, Interval
 from ..errors import DataError, ParameterError, ShapeError
 from .base import Differentiator, register
-from .methods import ODD_WINDOW, SavitzkyGolay
+from .methods import MAX_POLYORDER, ODD_WINDOW, SavitzkyGolay
 
 
 @register("dequantised")
@@ -46,7 +46,7 @@ class Dequantised(Differentiator):
     uniform_only = True
     _parameter_constraints = {
         "method": [None, InstanceOf(Differentiator, "a Differentiator")],
-        "window_length": [ODD_WINDOW], "polyorder": [Interval(Integral, 1, None)],
+        "window_length": [ODD_WINDOW], "polyorder": [Interval(Integral, 1, MAX_POLYORDER)],
         "iterations": [Interval(Integral, 1, None)]}
 
     def __init__(self, method: Differentiator | None = None, *, resolution, encoders=None,

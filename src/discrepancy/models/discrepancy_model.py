@@ -477,6 +477,10 @@ class DiscrepancyModel(Estimator):
 
 def _pairs(x: list, u):
     """``(x_i, u_i)`` of a list of trajectories (``u`` a matching list or None)."""
+    if any(np.ndim(xi) == 0 for xi in x):
+        raise ShapeError("x is a list holding numbers; a list means one array per trajectory: "
+                         "pass one trajectory as a 2-D array, np.array(x), of shape (samples, "
+                         "states)")
     if u is None:
         return [(xi, None) for xi in x]
     if not isinstance(u, (list, tuple)) or len(u) != len(x):

@@ -21,6 +21,7 @@ import sympy as sp
 
 from .._version import __version__
 from ..errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
+from ..resources import check_features
 from ..symbolic import IDENTIFIER, from_data, to_data
 
 _NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
@@ -143,6 +144,7 @@ def decode(doc, *, prior=None, functions=None) -> dict:
         raise _fail("user_functions must be a list of identifiers")
     if not isinstance(doc["features"], list) or not doc["features"]:
         raise _fail("features must be a non-empty list of expressions")
+    check_features("the model file's library", len(doc["features"]))
     allowed = set(states) | set(inputs)
     features = [_expression(f, f"features[{i}]", allowed, declared)
                 for i, f in enumerate(doc["features"])]

@@ -91,7 +91,12 @@ class FitSetup:
         return z, y, xd
 
     def _weak_rows(self, trajectory: Trajectory):
+        from ..resources import CHUNKED, check_memory, n_bytes
+
         x, u = trajectory.x, trajectory.u
+        check_memory(f"the weak form's integrals of {len(x)} samples and {self.n_features} "
+                     "columns", 3 * n_bytes((len(x), self.n_features + self.n_states)),
+                     f"Pass the trajectory in pieces: {CHUNKED}")
         theta = self.library.transform(x if u is None else np.hstack([x, u]))
         values = np.hstack([theta, self.prior(x, u)])
         integral, by_parts = self.differentiation.rows(x, trajectory.t, values)

@@ -223,6 +223,10 @@ def predict_interval(model, x, u, uncertainty, level):
     """See :meth:`DiscrepancyModel.predict_interval`."""
     _check_uncertainty(model, uncertainty)
     x, u = model._variables(x, u)
+    check_memory(f"the {len(uncertainty.samples)} resampled predictions of {len(x)} samples",
+                 n_bytes((len(uncertainty.samples), *x.shape)) + n_bytes((len(x),
+                                                                        model.coef_.shape[1])),
+                 "Predict fewer samples at a time")
     theta = model.feature_library_.transform(x if u is None else np.hstack([x, u]))
     prior = model.prior_(x, u)
     curves = prior[None] + np.einsum("mp,rnp->rmn", theta, uncertainty.samples)
