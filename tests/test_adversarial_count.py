@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import collections
 import re
+from pathlib import Path
 
 import test_adversarial_cli
 import test_adversarial_components
@@ -59,3 +60,9 @@ def test_the_docstring_gives_the_number_of_distinct_rows_per_entry_point():
     errors = sum(case.expect.error is not None for case in cases)
     assert f"{errors} rows must raise" in " ".join(__doc__.split())
     assert f"{len(cases) - errors} must give the right answer" in " ".join(__doc__.split())
+
+
+def test_the_readme_gives_the_same_count():
+    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text().split())
+    total = sum(len(table.CASES) for table in TABLES)
+    assert f"tries {total} distinct bad or edge inputs" in readme
