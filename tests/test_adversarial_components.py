@@ -158,6 +158,9 @@ CASES = [
     Case("optimizer", "set_params unknown", lambda: dc.STLSQ().set_params(bogus=1), raises(ParameterError, r"STLSQ has no parameter 'bogus'")),
     Case("optimizer", "spec with a list value", lambda: get_optimizer("stlsq(threshold=[1])").fit(THETA, Y), raises(ParameterError, r"threshold must be")),
     Case("optimizer", "constraints of the wrong size", lambda: dc.STLSQ(constraints=dc.optimizers.linear_constraints.LinearConstraints(2, 7)).fit(THETA, Y), raises(ShapeError, r"constraints are for 2 equations of 7 terms")),
+    Case("optimizer", "statistics of -1 columns", lambda: dc.GramStatistics(-1, 2), raises(ParameterError, r"GramStatistics: p must be an integer >= 0; got -1")),
+    Case("optimizer", "statistics of 10**6 columns", lambda: dc.GramStatistics(10**6, 2), raises(ResourceError, r"Gram statistics of 1000000 columns would need 8 TB")),
+    Case("optimizer", "fit_statistics of text", lambda: dc.STLSQ().fit_statistics("x"), raises(ParameterError, r"stats must be GramStatistics; got 'x'")),
     # --- differentiation methods
     Case("differentiation", "finite differences on 2 samples", lambda: diff("finite_difference", Z[:2], T[:2]), raises(ShapeError, r"x has 2 samples, fewer than the 3")),
     Case("differentiation", "x with NaN", lambda: diff("finite_difference", np.where(Z > 2, np.nan, Z)), raises(DataError, r"^x must be finite")),

@@ -16,8 +16,10 @@ import numpy as np
 import discrepancy as dc
 from adversarial import Case, check, circle, fast, params, raises, returns
 from discrepancy import io
+from discrepancy.distributed import fit_sources
 from discrepancy.errors import (
     DataError,
+    FeatureError,
     MissingFileError,
     ModelFileError,
     ParameterError,
@@ -31,6 +33,9 @@ T, X, XD = circle(300)
 ROT = fast(prior=[symbol("x2"), 0 * symbol("x1")]).fit(X, 0.01, x_dot=XD)
 DOC = ROT.to_state()
 DIR = Path(tempfile.mkdtemp(prefix="adversarial-files-"))
+FUNC_FILE = DIR / "functions.json"
+fast(feature_library=dc.CustomLibrary(functions={"sq": np.square})).fit(X, 0.01, x_dot=X ** 2).save(
+    FUNC_FILE)
 
 
 def write(name: str, content) -> Path:
@@ -159,6 +164,8 @@ CASES = [
     Case("model file", "fit record nested 10 deep", lambda: load_doc(setter("fit", "differentiation_choice", json.loads("{\"a\": " * 10 + "1" + "}" * 10))), raises(ModelFileError, r"differentiation_choice must be an object")),
     Case("model file", "over 20 MiB", lambda: load_doc(raw=" " * (21 * 2**20)), raises(ModelFileError, r"more than the 20971520")),
     Case("model file", "a 10**6-digit integer", lambda: load_doc(raw="1" * 10**6), raises(ModelFileError, r"not a usable JSON document|not valid JSON|format")),
+    Case("model file", "user function that raises", lambda: dc.load_model(FUNC_FILE, functions={"sq": lambda v: 1 / 0}).predict(X), raises(FeatureError, r"user function 'sq' raised ZeroDivisionError")),
+    Case("model file", "user function not callable", lambda: dc.load_model(FUNC_FILE, functions={"sq": 3}), raises(ParameterError, r"functions must be None or a non-empty mapping of identifier names to callables")),
     Case("model file", "round trip", lambda: load_doc().predict(X), returns(lambda v: np.allclose(v, XD, atol=1e-9))),
     Case("model file", "from_state of a list", lambda: dc.DiscrepancyModel.from_state([1]), raises(ModelFileError, r"format is list")),
     # --- io.load
@@ -231,6 +238,8 @@ CASES = [
     Case("stream", "CSV files without the column", lambda: stream_source(dc.CSVFiles(csv("good.csv", GOOD_CSV), x=["x1", "x9"])), raises(UnknownNameError, r"no column 'x9' \(for x\)")),
     Case("stream", "HDF5 source equals the in-memory fit", lambda: stream_source(dc.HDF5Source(h5("src2.h5", x=X, xd=XD), x_dot="xd", chunk_size=77)), returns(same_model)),
     # --- Dask
+    Case("dask", "fit_sources of a number", lambda: fit_sources(fast(), [42]), raises(ParameterError, r"sources\[0\] must be a ChunkSource")),
+    Case("dask", "fit_sources of nothing", lambda: fit_sources(fast(), []), raises(ShapeError, r"sources must hold at least one ChunkSource")),
     Case("dask", "0 rows", lambda: on_dask(np.zeros((0, 2))), raises(ShapeError, r"x\[0\] has no rows")),
     Case("dask", "NaN named by row", lambda: on_dask(np.where(np.arange(300)[:, None] == 250, np.nan, X)), raises(DataError, r"dask array x\[0\]( rows \d+\.\.\d+)?: x must be finite; found nan at row \d+ of the chunk \(row 250 of the trajectory")),
     Case("dask", "1-D array", lambda: on_dask(T[:, None]).fit(da.from_array(T), 0.01), raises(ShapeError, r"x must be 2-D")),

@@ -8,6 +8,7 @@ import sympy as sp
 import discrepancy as dc
 from adversarial import Case, check, circle, fast, params, raises, returns
 from discrepancy.errors import (
+    ConvergenceError,
     DataError,
     FeatureError,
     ParameterError,
@@ -184,6 +185,13 @@ CASES = [
     Case("model", "constraints a number", lambda: fit(constraints=42), raises(ParameterError, r"constraints must be")),
     Case("model", "constraints on an unknown state", lambda: fit(constraints=dc.Constraints(exact_equations=["x9"])), raises(UnknownNameError, r"'x9'")),
     Case("model", "constraints with Lasso", lambda: fit(optimizer=dc.Lasso(), constraints=dc.Constraints(exact_equations=["x1"])), raises(ParameterError, r"constraints need an optimizer")),
+    Case("model", "constraints naming a state as a string", lambda: fit(constraints=dc.Constraints(exact_equations="x1")), raises(ParameterError, r"Constraints.exact_equations must be a list of state names; got the string 'x1'")),
+    Case("model", "constraints that cannot all hold", lambda: fit(constraints=dc.Constraints(equal=[({("x1", "x2"): 1}, 1)], at_most=[({("x1", "x2"): 1}, 0)])), raises(ConvergenceError, r"inconsistent")),
+    Case("model", "make_setup of -1 states", lambda: dc.DiscrepancyModel().make_setup(-1, 0), raises(ParameterError, r"make_setup: n_states must be an integer >= 1; got -1")),
+    Case("model", "make_setup of 2.5 states", lambda: dc.DiscrepancyModel().make_setup(2.5, 0), raises(ParameterError, r"make_setup: n_states must be an integer >= 1; got 2.5")),
+    Case("model", "fit_statistics of text", lambda: fit(x_dot=XD).fit_statistics("stats", fit(x_dot=XD).setup_), raises(ParameterError, r"stats must be GramStatistics")),
+    Case("model", "Van der Pol with alpha 'a'", lambda: dc.systems.VanDerPol(alpha="a"), raises(ParameterError, r"VanDerPol: alpha must be a finite number; got 'a'")),
+    Case("model", "Van der Pol rhs of 3 states", lambda: dc.systems.VanDerPol().rhs(np.zeros((3, 3))), raises(ShapeError, r"^x must have 2 columns")),
     Case("model", "discrete_time a word", lambda: fit(discrete_time="yes"), raises(ParameterError, r"discrete_time must be")),
 ]
 

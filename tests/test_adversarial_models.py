@@ -110,6 +110,7 @@ CASES = [
     Case("export", "coefficients before fit", lambda: fast().coefficients(), raises(NotFittedError, r"fit")),
     Case("export", "with_coefficients of the wrong shape", lambda: ROT.with_coefficients(np.zeros((2, 3))), raises(ShapeError, r"coef must be finite with shape \(2, 6\)")),
     Case("export", "with_coefficients with NaN", lambda: ROT.with_coefficients(np.full((2, 6), np.nan)), raises(ShapeError, r"coef must be finite")),
+    Case("export", "with_coefficients of text", lambda: ROT.with_coefficients("abc"), raises(ShapeError, r"coef must be a numeric array; got 'abc'")),
     Case("export", "sympy of the hybrid", lambda: SYM.to_sympy(), returns(lambda e: e[0] == X2 and abs(float(e[1].coeff(X1)) + 1) < 1e-9)),
     Case("export", "latex of the discrepancy", lambda: CALL.to_latex(part="discrepancy"), returns(lambda s: "x_{1}" in s and "- 1.0" in s)),
     # --- simulate

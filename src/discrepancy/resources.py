@@ -28,6 +28,8 @@ MAX_FEATURES = 50_000
 #: process may use (the machine's, or less under ``ulimit -v``). Set it to change the limit.
 MEMORY_LIMIT: int | None = None
 MEMORY_FRACTION = 0.8
+#: allocations this small are never refused (and cost no look-up of the budget)
+ALWAYS_ALLOWED = 2**26
 
 #: what to do instead, for the advice in messages
 CHUNKED = ("fit the data in chunks (an iterator of Chunk, HDF5Source, or a dask array): "
@@ -76,6 +78,8 @@ def _size(nbytes: int) -> str:
 def check_memory(what: str, nbytes: int, advice: str) -> None:
     """Raise ResourceError when ``nbytes`` (for ``what``, e.g. ``"the simulation's output
     (1e12 steps x 2 states)"``) exceed :func:`memory_budget`; ``advice`` says what to do."""
+    if nbytes <= ALWAYS_ALLOWED:
+        return
     budget = memory_budget()
     if nbytes > budget:
         raise ResourceError(f"{what} would need {_size(nbytes)}; at most {_size(budget)} may be "

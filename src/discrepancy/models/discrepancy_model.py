@@ -7,10 +7,10 @@ import numpy as np
 
 from ..accumulate import Names
 from ..base import Estimator
-from ..constraints import InstanceOf, Predicate, is_callable, validate_params
+from ..constraints import InstanceOf, Integral, Interval, Predicate, is_callable, validate_params
 from ..data.chunks import data_kind
 from ..data.trajectory import Trajectory, as_2d, as_trajectories
-from ..data.validation import check_vector
+from ..data.validation import as_float_array, check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary
@@ -152,6 +152,8 @@ class DiscrepancyModel(Estimator):
         :class:`~discrepancy.data.Trajectory`) is needed when the differentiation method
         is chosen from the data (the default)."""
         self._validate_params()
+        validate_params("make_setup", {"n_states": n_states, "n_inputs": n_inputs},
+                        {"n_states": [Interval(Integral, 1)], "n_inputs": [Interval(Integral, 0)]})
         return resolve_setup(self, n_states, n_inputs, sample)
 
     def fit_statistics(self, stats: GramStatistics, setup: FitSetup) -> DiscrepancyModel:
@@ -160,6 +162,9 @@ class DiscrepancyModel(Estimator):
         if not isinstance(setup, FitSetup):
             raise ParameterError(f"setup must be a FitSetup (from make_setup); got "
                                  f"{type(setup).__name__}")
+        if not isinstance(stats, GramStatistics):
+            raise ParameterError(f"stats must be GramStatistics (from setup.statistics); got "
+                                 f"{describe(stats)}")
         if (stats.p, stats.n) != (setup.n_features, setup.n_states):
             raise ShapeError(f"stats are for {stats.p} features and {stats.n} states; the set-up "
                              f"has {setup.n_features} and {setup.n_states}")
@@ -407,7 +412,7 @@ class DiscrepancyModel(Estimator):
         """A copy of this fitted model with coefficients ``coef`` ``(n, p)`` (e.g. one
         bootstrap resample); shares the set-up."""
         self.check_is_fitted()
-        coef = np.asarray(coef, dtype=float)
+        coef = as_float_array("coef", coef)
         if coef.shape != self.coef_.shape or not np.all(np.isfinite(coef)):
             raise ShapeError(f"coef must be finite with shape {self.coef_.shape}; got "
                              f"{coef.shape}")

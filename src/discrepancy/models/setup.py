@@ -9,6 +9,7 @@ statistics with the same set-up and hand them to :meth:`DiscrepancyModel.fit_sta
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -141,7 +142,7 @@ class FitSetup:
                      SMALLER_LIBRARY + "; they are p x p, so chunked fitting does not help")
         return GramStatistics(p, n, N_FOLDS, self.fold_segment)
 
-    @property
+    @cached_property
     def names(self):
         """Names of Θ's columns and of the variables, for messages about the data."""
         from ..accumulate import Names

@@ -44,6 +44,12 @@ class Constraints:
     def compile(self, state_names: Sequence[str], terms: Sequence[str]) -> LinearConstraints:
         """Index form for equations ``state_names`` and library ``terms``."""
         states, terms = list(state_names), list(terms)
+        lists = [("exact_equations", self.exact_equations),
+                 *((f"only[{k!r}]", v) for k, v in (self.only or {}).items())]
+        for name, value in lists:
+            if isinstance(value, str):
+                raise ParameterError(f"Constraints.{name} must be a list of state names; got "
+                                     f"the string {value!r} (write [{value!r}])")
         mask = np.ones((len(states), len(terms)), bool)
         for state in self.exact_equations:
             mask[_index(state, states, "state (exact_equations)")] = False

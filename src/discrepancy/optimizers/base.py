@@ -9,7 +9,7 @@ import scipy.linalg
 
 from ..base import Estimator
 from ..constraints import Integral, Interval
-from ..errors import ConvergenceError, DataError, ParameterError, ShapeError
+from ..errors import ConvergenceError, DataError, ParameterError, ShapeError, describe
 from ..registry import Registry
 from .gram import GramStatistics
 
@@ -105,6 +105,8 @@ class Optimizer(Estimator, ABC):
     def fit_statistics(self, stats: GramStatistics) -> Optimizer:
         """Fit from :class:`GramStatistics` (with their folds, when kept); returns self."""
         self._validate_params()
+        if not isinstance(stats, GramStatistics):
+            raise ParameterError(f"stats must be GramStatistics; got {describe(stats)}")
         for name in ("gram", "rhs", "yy"):
             value = getattr(stats, name)
             if value is not None and not np.all(np.isfinite(value)):
