@@ -1,29 +1,29 @@
-"""The adversarial suite tries 645 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 672 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
-| fit | 71 |
+| fit | 72 |
 | prior | 21 |
-| model | 41 |
-| library | 61 |
+| model | 47 |
+| library | 65 |
 | optimizer | 43 |
 | differentiation | 36 |
 | predict | 15 |
 | score | 17 |
-| export | 19 |
-| simulate | 42 |
-| bootstrap | 19 |
-| model file | 48 |
-| io.load | 36 |
-| stream | 31 |
+| export | 21 |
+| simulate | 44 |
+| bootstrap | 20 |
+| model file | 50 |
+| io.load | 40 |
+| stream | 34 |
 | dask | 11 |
 | cli | 47 |
-| energy | 26 |
+| energy | 28 |
 | control | 27 |
 | isolated | 34 |
-| total | 645 |
+| total | 672 |
 
-532 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+559 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
 matches a pattern naming the argument; 113 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 34 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a

@@ -70,6 +70,8 @@ CASES = [
     Case("energy", "friction library of no names", lambda: dc.energy.default_friction_library([]), raises(ParameterError, r"velocity_names must be a non-empty list")),
     Case("energy", "friction joint of an unknown speed", lambda: dc.energy.default_friction_library(["dq1"], joints={"j": "dq9"}), raises(ParameterError, r"joints\['j'\] must be a velocity name")),
     Case("energy", "negative Stribeck speed", lambda: dc.energy.default_friction_library(["dq1"], stribeck_speed=-1), raises(ParameterError, r"stribeck_speed must be > 0")),
+    Case("energy", "blocks longer than the record", lambda: dissipation(block_seconds=15).fit(Q, T, dq=DQ), raises(ParameterError, r"block_seconds = 15 s leaves 1 blocks of a 19.99 s record; the fit needs at least 3")),
+    Case("energy", "a step so large the times overflow", lambda: dissipation().fit(Q, 1e308, dq=DQ), raises(DataError, r"^t as a time step of 1e\+308")),
     Case("energy", "bootstrap of 1 resample", lambda: FITTED.bootstrap(Q, T, dq=DQ, n_resamples=1), raises(ParameterError, r"n_resamples must be an integer >= 2")),
     Case("energy", "bootstrap blocks of 0 s", lambda: FITTED.bootstrap(Q, T, dq=DQ, block_seconds=0), raises(ParameterError, r"block_seconds must be > 0 s")),
     Case("energy", "bootstrap seed a word", lambda: FITTED.bootstrap(Q, T, dq=DQ, seed="a"), raises(ParameterError, r"seed must be")),

@@ -121,6 +121,8 @@ FOLDER.mkdir()
 CASES = [
     # --- model files
     Case("model file", "missing", lambda: dc.load_model(DIR / "nothing.json"), raises(MissingFileError, r"model file '.*nothing.json' does not exist")),
+    Case("model file", "path None", lambda: dc.load_model(None), raises(ParameterError, r"model file must be a file name \(text or a pathlib.Path\); got None")),
+    Case("model file", "path bytes", lambda: dc.load_model(b"m.json"), raises(ParameterError, r"model file must be a file name")),
     Case("model file", "a folder", lambda: dc.load_model(DIR), raises(ModelFileError, r"is a folder")),
     Case("model file", "empty", lambda: load_doc(raw=""), raises(ModelFileError, r"not valid JSON")),
     Case("model file", "truncated", lambda: load_doc(raw=json.dumps(DOC)[:200]), raises(ModelFileError, r"not valid JSON")),
@@ -170,6 +172,10 @@ CASES = [
     Case("model file", "from_state of a list", lambda: dc.DiscrepancyModel.from_state([1]), raises(ModelFileError, r"format is list")),
     # --- io.load
     Case("io.load", "missing file", lambda: io.load(DIR / "nothing.csv"), raises(MissingFileError, r"data file '.*nothing.csv' does not exist")),
+    Case("io.load", "path a number", lambda: io.load(42), raises(ParameterError, r"data file must be a file name \(text or a pathlib.Path\); got 42")),
+    Case("io.load", "states a number", lambda: io.load(csv("good.csv", GOOD_CSV), states=3), raises(ParameterError, r"io.load: states must be None or a name or a non-empty list of names; got 3")),
+    Case("io.load", "states an empty list", lambda: io.load(npz("good.npz", x=X, t=T), states=[]), raises(ParameterError, r"states must be")),
+    Case("io.load", "time a list", lambda: io.load(npz("good.npz", x=X, t=T), time=["t"]), raises(ParameterError, r"io.load: time must be None or a name")),
     Case("io.load", "a folder named .csv", lambda: io.load(FOLDER), raises(DataError, r"folder.csv' is a folder, not a file")),
     Case("io.load", "unknown suffix", lambda: io.load(write("run.xlsx", "a")), raises(UnknownNameError, r"unknown file type '.xlsx'; valid suffixes")),
     Case("io.load", "empty CSV", lambda: io.load(csv("empty.csv", "")), raises(DataError, r"empty.csv: a CSV file needs a header row and data rows; it is empty")),
@@ -231,6 +237,9 @@ CASES = [
     Case("stream", "HDF5 source without the dataset", lambda: dc.HDF5Source(h5("src.h5", x=X), x="states"), raises(UnknownNameError, r"no dataset 'states' \(for x\)")),
     Case("stream", "HDF5 source of a 1-D x", lambda: dc.HDF5Source(h5("flat.h5", x=T)), raises(ShapeError, r"dataset 'x' \(x\) has shape \(300,\)")),
     Case("stream", "HDF5 source paths a number", lambda: dc.HDF5Source(42), raises(ParameterError, r"paths must be a file, a folder or a non-empty list")),
+    Case("stream", "NPZ files with x a list", lambda: dc.NPZFiles([npz("good.npz", x=X, t=T)], x=["x"]), raises(ParameterError, r"NPZFiles: x must be a name; got list")),
+    Case("stream", "CSV files with x a number", lambda: dc.CSVFiles(csv("good.csv", GOOD_CSV), x=3), raises(ParameterError, r"CSVFiles: x must be a name or a non-empty list of names; got 3")),
+    Case("stream", "HDF5 source with t a list", lambda: dc.HDF5Source(h5("src.h5", x=X), t=["t"]), raises(ParameterError, r"HDF5Source: t must be None or a name")),
     Case("stream", "NPZ files of an empty folder", lambda: dc.NPZFiles(DIR / "folder.csv"), raises(MissingFileError, r"holds no files matching '\*.npz'")),
     Case("stream", "NPZ files with a lying header", lambda: stream_source(dc.NPZFiles([zipped("lie2.npz", {"x.npy": npy_member((10**6, 10**5), b"")})])), raises(DataError, r"lie2.npz: array 'x' declares shape")),
     Case("stream", "CSV files with chunk_size 0", lambda: dc.CSVFiles(csv("good.csv", GOOD_CSV), x=["x1", "x2"], chunk_size=0), raises(ParameterError, r"CSVFiles: chunk_size must be an integer >= 1")),

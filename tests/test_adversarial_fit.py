@@ -98,6 +98,7 @@ CASES = [
     Case("fit", "t list shorter than x list", lambda: fit([X, X], t=[T]), raises(ShapeError, r"^t must be a list of 2")),
     Case("fit", "t a dict", lambda: fit(t={"dt": 0.01}), raises(DataError, r"^t must be a positive time step")),
     Case("fit", "step so small the derivatives overflow", lambda: fit(X * 1e10, t=1e-300), raises(FeatureError, r"target of equation 0.*overflows|is inf")),
+    Case("fit", "step so large the times overflow", lambda: fit(t=1e308), raises(DataError, r"^t as a time step of 1e\+308 puts the last of 200 samples beyond float range")),
     Case("fit", "non-uniform t with Savitzky-Golay", lambda: fit(t=T ** 1.5, differentiation_method="savitzky_golay"), raises(DataError, r"uniformly spaced t")),
     Case("fit", "t None is a unit step", lambda: fit(X, None, x_dot=XD), returns(rotation)),
     Case("fit", "numpy float32 step", lambda: fit(t=np.float32(0.01), x_dot=XD), returns(rotation)),
@@ -192,6 +193,12 @@ CASES = [
     Case("model", "fit_statistics of text", lambda: fit(x_dot=XD).fit_statistics("stats", fit(x_dot=XD).setup_), raises(ParameterError, r"stats must be GramStatistics")),
     Case("model", "Van der Pol with alpha 'a'", lambda: dc.systems.VanDerPol(alpha="a"), raises(ParameterError, r"VanDerPol: alpha must be a finite number; got 'a'")),
     Case("model", "Van der Pol rhs of 3 states", lambda: dc.systems.VanDerPol().rhs(np.zeros((3, 3))), raises(ShapeError, r"^x must have 2 columns")),
+    Case("model", "constraints only a string", lambda: dc.Constraints(only="x1"), raises(ParameterError, r"Constraints.only must be None or a mapping")),
+    Case("model", "constraints equal a number", lambda: dc.Constraints(equal=3), raises(ParameterError, r"Constraints.equal must be a list")),
+    Case("model", "Savitzky-Golay window None", lambda: fit(differentiation_method=dc.SavitzkyGolay(window_length=None)), raises(ParameterError, r"SavitzkyGolay: window_length must be an odd integer >= 3 or a list.*got None")),
+    Case("model", "Kalman too smooth to solve", lambda: dc.Kalman(alpha=1e12)(*circle(400)[1::-1]), raises(ConvergenceError, r"Kalman\(alpha=1000000000000.0\) failed on these data \(LinAlgError")),
+    Case("model", "trend filter of 10**12 iterations", lambda: fit(differentiation_method=dc.TrendFiltered(max_iter=10**12)), raises(ConvergenceError, r"TrendFiltered.* failed on these data \(OverflowError")),
+    Case("model", "Dequantised encoders of text", lambda: fit(differentiation_method=dc.Dequantised(resolution=1e-6, encoders="x")), raises(ShapeError, r"encoders must be a numeric array")),
     Case("model", "discrete_time a word", lambda: fit(discrete_time="yes"), raises(ParameterError, r"discrete_time must be")),
 ]
 

@@ -102,6 +102,8 @@ CASES = [
     Case("export", "equations precision a word", lambda: ROT.equations(precision="3"), raises(ParameterError, r"equations: precision must be an integer")),
     Case("export", "print lhs of one name", lambda: ROT.print(lhs=["a"]), raises(ParameterError, r"lhs must be a list of 2 strings")),
     Case("export", "print lhs a string", lambda: ROT.print(lhs="ab"), raises(ParameterError, r"lhs must be a list of 2 strings")),
+    Case("export", "part an array", lambda: ROT.to_latex(part=np.zeros(0)), raises(ParameterError, r"part must be 'hybrid' or 'discrepancy'")),
+    Case("export", "save to a number", lambda: ROT.save(3), raises(ParameterError, r"path must be a file name \(text or a pathlib.Path\); got 3")),
     Case("export", "casadi of a callable prior", lambda: CALL.to_casadi(), raises(ExportError, r"callable")),
     Case("export", "casadi of a numpy function term", lambda: FUNC.to_casadi(part="discrepancy"), raises(ExportError, r"sq\(x1\)")),
     Case("export", "save to a folder", lambda: ROT.save("."), raises(ModelFileError, r"path '.' is a folder")),
@@ -127,6 +129,8 @@ CASES = [
     Case("simulate", "t 2-D", lambda: sim(t=TS[:, None]), raises(ShapeError, r"^t must be a 1-D array")),
     Case("simulate", "t of dates", lambda: sim(t=np.arange(5).astype("datetime64[s]")), raises(DataError, r"^t must be plain numbers")),
     Case("simulate", "unknown method", lambda: sim(method="bogus"), raises(ParameterError, r"method must be one of RK45.*'bogus'")),
+    Case("simulate", "method an array", lambda: sim(method=np.zeros(0)), raises(ParameterError, r"method must be one of RK45")),
+    Case("simulate", "rtol -10**30", lambda: sim(rtol=-10**30), raises(ParameterError, r"rtol must be a positive number")),
     Case("simulate", "negative atol", lambda: sim(atol=-1), raises(ParameterError, r"atol must be a positive number; got -1")),
     Case("simulate", "rtol 0", lambda: sim(rtol=0), raises(ParameterError, r"rtol must be a positive number")),
     Case("simulate", "substeps 0", lambda: sim(method="rk4", substeps=0), raises(ParameterError, r"substeps must be an integer in \[1, 10000\]")),
@@ -175,6 +179,7 @@ CASES = [
     Case("bootstrap", "interval of a number", lambda: NOISY.predict_interval(X, uncertainty=3), raises(ParameterError, r"uncertainty must be this model's bootstrap")),
     Case("bootstrap", "level 1.5", lambda: NOISY.predict_interval(X, uncertainty=UNC, level=1.5), raises(ParameterError, r"level must be a number in \(0, 1\); got 1.5")),
     Case("bootstrap", "simulated band of 1 draw", lambda: NOISY.simulate_interval([0, 1], TS, uncertainty=UNC, n_draws=1), raises(ParameterError, r"n_draws must be an integer >= 2")),
+    Case("bootstrap", "simulated band with seed 'x'", lambda: NOISY.simulate_interval([0, 1], TS, uncertainty=UNC, seed="x"), raises(ParameterError, r"simulate_interval: seed must be None or an integer >= 0")),
     Case("bootstrap", "simulated band at level 0", lambda: NOISY.simulate_interval([0, 1], TS, uncertainty=UNC, level=0), raises(ParameterError, r"level must be a number in \(0, 1\)")),
 ]
 

@@ -9,18 +9,27 @@ naming the file; arrays of Python objects are refused (nothing is ever unpickled
 """
 from __future__ import annotations
 
+import os
 import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError, MissingFileError
+from ..errors import DataError, MissingFileError, ParameterError, describe
 from ..resources import CHUNKED, check_memory, n_bytes
+
+
+def as_path(path, what: str = "path") -> Path:
+    """``path`` (text or a path object) as a Path; ParameterError for anything else."""
+    if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes) or path == "":
+        raise ParameterError(f"{what} must be a file name (text or a pathlib.Path); got "
+                             f"{describe(path)}")
+    return Path(path)
 
 
 def check_file(path, what: str = "data file") -> Path:
     """``path`` as a Path to an existing file; MissingFileError or DataError (a folder)."""
-    path = Path(path)
+    path = as_path(path, what)
     if not path.exists():
         raise MissingFileError(f"{what} {str(path)!r} does not exist")
     if not path.is_file():

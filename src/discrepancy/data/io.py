@@ -10,12 +10,17 @@ from pathlib import Path
 
 import numpy as np
 
+from ..constraints import InstanceOf, Predicate, validate_params
 from ..errors import DataError, UnknownNameError
 from ..resources import CHUNKED, check_memory
 from .containers import check_file, open_arrays
 from .csv_table import CSVTable
 from .trajectory import as_2d, as_times
 
+#: a column or variable name, and what ``states=``/``inputs=`` may be
+NAME = InstanceOf(str, "a name")
+NAMES = [None, NAME, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
+    isinstance(n, str) for n in v), "a non-empty list of names")]
 #: memory of reading a CSV file whole, per character of it (Python lists of floats)
 CSV_BYTES_PER_CHARACTER = 8
 SUFFIXES = {".csv": "csv", ".txt": "csv", ".npz": "npz", ".mat": "mat", ".h5": "hdf5",
@@ -56,6 +61,8 @@ def load(path, *, states=None, inputs=None, time: str | None = "t") -> LoadedDat
         non-numeric or non-finite values, bad times), ResourceError (an array too large
         to read whole; only the arrays asked for are read).
     """
+    validate_params("io.load", {"states": states, "inputs": inputs, "time": time},
+                    {"states": NAMES, "inputs": NAMES, "time": [None, NAME]})
     path = check_file(path)
     kind = SUFFIXES.get(path.suffix.lower())
     if kind is None:

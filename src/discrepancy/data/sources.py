@@ -30,8 +30,9 @@ from ..errors import (
     describe,
 )
 from .chunks import Chunk, ChunkSource
-from .containers import open_arrays
+from .containers import as_path, open_arrays
 from .csv_table import CSVTable
+from .io import NAME, NAMES
 
 DEFAULT_CHUNK = 65536
 FIELDS = ("x", "t", "u", "x_dot")
@@ -50,7 +51,7 @@ def _paths(paths, pattern: str) -> list[Path]:
     if not isinstance(paths, (str, Path, list, tuple)) or not paths:
         raise ParameterError(f"paths must be a file, a folder or a non-empty list of files; "
                              f"got {describe(paths)}")
-    out = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+    out = [as_path(p, "paths") for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
     for p in out:
         if not p.exists():
             raise MissingFileError(f"data file {str(p)!r} does not exist")
@@ -70,8 +71,10 @@ class _ArrayFiles(ChunkSource):
     def __init__(self, paths, *, x: str = "x", t: str | None = None, u: str | None = None,
                  x_dot: str | None = None, chunk_size: int = DEFAULT_CHUNK,
                  lengths: int | Sequence[int] | None = None):
-        validate_params(type(self).__name__, {"chunk_size": chunk_size, "lengths": lengths},
-                        {**_CHUNK_SIZE, **_LENGTHS})
+        validate_params(type(self).__name__, {"chunk_size": chunk_size, "lengths": lengths,
+                                              "x": x, "t": t, "u": u, "x_dot": x_dot},
+                        {**_CHUNK_SIZE, **_LENGTHS, "x": [NAME], "t": [None, NAME],
+                         "u": [None, NAME], "x_dot": [None, NAME]})
         self.paths = _paths(paths, self._pattern)
         self.names = {"x": x, "t": t, "u": u, "x_dot": x_dot}
         self.chunk_size = int(chunk_size)
@@ -194,9 +197,12 @@ class ZarrSource(_ArrayFiles):
 class _TableFiles(ChunkSource):
     def __init__(self, paths, *, x, t=None, u=None, x_dot=None, chunk_size=DEFAULT_CHUNK,
                  one_trajectory: bool = False):
+        names = self._names
         validate_params(type(self).__name__, {"chunk_size": chunk_size,
-                                              "one_trajectory": one_trajectory},
-                        {**_CHUNK_SIZE, "one_trajectory": [bool]})
+                                              "one_trajectory": one_trajectory,
+                                              "x": x, "t": t, "u": u, "x_dot": x_dot},
+                        {**_CHUNK_SIZE, "one_trajectory": [bool], "x": names[1:],
+                         "t": [None, NAME], "u": names, "x_dot": names})
         self.paths = _paths(paths, self._pattern)
         self.names = {"x": x, "t": t, "u": u, "x_dot": x_dot}
         self.chunk_size = int(chunk_size)
@@ -224,6 +230,7 @@ class NPZFiles(_TableFiles):
 
     _pattern = "*.npz"
     _what = "array"
+    _names = [None, NAME]
 
     def __init__(self, paths, *, x="x", **kwargs):
         super().__init__(paths, x=x, **kwargs)
@@ -244,6 +251,7 @@ class CSVFiles(_TableFiles):
 
     _pattern = "*.csv"
     _what = "column"
+    _names = NAMES
 
     def _file_chunks(self, path):
         with CSVTable(path) as table:

@@ -130,7 +130,11 @@ def check_times(name: str, t, m: int, *, where: str | None = None,
         if not np.isfinite(dt) or dt <= 0:
             raise DataError(f"{_place(where)}{name} as a time step must be a positive finite "
                             f"number; got {dt}")
-        return (np.arange(m) + row_offset) * dt
+        times = (np.arange(m) + row_offset) * dt
+        if m and not np.isfinite(times[-1]):
+            raise DataError(f"{_place(where)}{name} as a time step of {dt:g} puts the last of "
+                            f"{m} samples beyond float range; give a smaller step")
+        return times
     times = check_array(name, t, ndim=1, where=where, row_offset=row_offset)
     if times.shape[0] != m:
         raise ShapeError(f"{_place(where)}{name} must be a step or a 1-D array of {m} times (one "

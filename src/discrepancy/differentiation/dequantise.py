@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..constraints import InstanceOf, Integral, Interval
+from ..data.validation import as_float_array
 from ..errors import DataError, ParameterError, ShapeError
 from .base import Differentiator, register
 from .methods import MAX_POLYORDER, ODD_WINDOW, SavitzkyGolay
@@ -77,7 +78,7 @@ class Dequantised(Differentiator):
     def _matrix(self, n: int) -> np.ndarray:
         if self.encoders is None:
             return np.eye(n)
-        e = np.asarray(self.encoders, dtype=float)
+        e = as_float_array("encoders", self.encoders)
         if e.shape != (n, n):
             raise ShapeError(f"encoders must be an ({n}, {n}) matrix for x with {n} columns; "
                              f"got shape {e.shape}")

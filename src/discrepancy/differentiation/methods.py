@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..constraints import Integral, Interval, Predicate, Real
-from ..errors import ParameterError
+from ..errors import ConvergenceError, ParameterError
 from .base import Differentiator, register
 from .savgol import savgol
 
@@ -106,9 +106,13 @@ class _DerivativePackage(Differentiator):
         return {k: v for k, v in self.get_params(deep=False).items() if k != "smooth"}
 
     def _compute(self, x, t):
-        method = self._method()
-        x_dot = method.d(x, t, axis=0)
-        x_smooth = method.x(x, t, axis=0) if getattr(self, "smooth", False) else x
+        try:
+            method = self._method()
+            x_dot = method.d(x, t, axis=0)
+            x_smooth = method.x(x, t, axis=0) if getattr(self, "smooth", False) else x
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as e:
+            raise ConvergenceError(f"{self!r} failed on these data ({type(e).__name__}: {e}); "
+                                   "try other parameters or another method") from e
         return np.asarray(x_smooth, float), np.asarray(x_dot, float)
 
 

@@ -15,9 +15,10 @@ import sympy as sp
 
 from ..base import Estimator
 from ..constraints import InstanceOf, Predicate
-from ..errors import NotFittedError, ParameterError, ShapeError, UnknownNameError
+from ..data.validation import as_float_array
+from ..errors import NotFittedError, ParameterError, ShapeError, UnknownNameError, describe
 from ..resources import check_features
-from ..symbolic import feature_name, symbol
+from ..symbolic import IDENTIFIER, feature_name, symbol
 
 #: ``variables=``: ``None`` (all) or a list of names / indices into ``z = [x, u]``
 VARIABLES = [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
@@ -59,7 +60,7 @@ class FeatureLibrary(Estimator, ABC):
         """
         if not hasattr(self, "feature_expressions_"):
             raise NotFittedError(f"{type(self).__name__}.transform called before fit(names)")
-        Z = np.asarray(Z, dtype=float)
+        Z = as_float_array("Z", Z)
         if Z.ndim != 2 or Z.shape[1] != len(self.names_):
             raise ShapeError(f"Z must be (m, {len(self.names_)}) for variables {self.names_}; "
                              f"got shape {Z.shape}")
@@ -92,6 +93,16 @@ class FeatureLibrary(Estimator, ABC):
         self.names_ = list(names)
         self.feature_expressions_ = expressions
         self.n_features_ = len(expressions)
+
+
+def check_names(names) -> list[str]:
+    """The variable names a library is fitted to: a list of distinct identifiers."""
+    if isinstance(names, str) or not isinstance(names, (list, tuple)) or not all(
+            isinstance(n, str) and IDENTIFIER.match(n) for n in names) or \
+            len(set(names)) != len(names):
+        raise ShapeError(f"names must be a list of distinct identifiers (one per variable); "
+                         f"got {describe(names)}")
+    return list(names)
 
 
 def _check_operand(verb: str, other) -> None:
@@ -128,6 +139,7 @@ class BaseLibrary(FeatureLibrary):
 
     def fit(self, names: Sequence[str]) -> BaseLibrary:
         self._validate_params()
+        names = check_names(names)
         self._index = self._select(names)
         count = self._n_features(len(self._index))
         if count is not None:  # counted before any expression is built
@@ -187,6 +199,7 @@ class ConcatLibrary(FeatureLibrary):
 
     def fit(self, names):
         self._validate_params()
+        names = check_names(names)
         self._fitted_parts = self._parts()
         exprs = [e for lib in self._fitted_parts for e in lib.fit(names).feature_expressions_]
         self._keep = _unique(exprs)
@@ -213,6 +226,7 @@ class TensorLibrary(FeatureLibrary):
 
     def fit(self, names):
         self._validate_params()
+        names = check_names(names)
         a = self.left.fit(names).feature_expressions_
         b = self.right.fit(names).feature_expressions_
         check_features(repr(self), len(a) * len(b))

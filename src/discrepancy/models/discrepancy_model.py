@@ -297,16 +297,17 @@ class DiscrepancyModel(Estimator):
         keywords_only("simulate", args, "u")
         self.check_is_fitted()
         x0 = check_vector("x0", x0, self.n_states_)
+        validate_params("simulate", {"compiled": compiled}, {"compiled": [bool]})
+        if not self.discrete_time:
+            from .simulation import check_options
+            check_options(integrator_kws)  # before any work that depends on them
         if self.discrete_time:
             from .discrete import iterate
             return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_)
         if "method" not in integrator_kws and self._has_jumps():
             integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
-        validate_params("simulate", {"compiled": compiled}, {"compiled": [bool]})
         if integrator_kws.get("method") == "rk4" and compiled and not callable(u):
             from .fast_simulation import compiled_stepper
-            from .simulation import check_options
-            check_options(integrator_kws)
             integrator_kws["compiled"] = compiled_stepper(self, x0, u,
                                                           integrator_kws.get("substeps", 4))
         return integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,

@@ -20,6 +20,7 @@ import numpy as np
 import sympy as sp
 
 from .._version import __version__
+from ..data.containers import as_path
 from ..errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
 from ..resources import check_features
 from ..symbolic import IDENTIFIER, from_data, to_data
@@ -74,7 +75,7 @@ def _spec_or_none(registry, obj):
 def write_json(path, doc: dict) -> None:
     """Write ``doc`` to ``path`` atomically: a failed or killed write leaves any existing
     file as it was. Raises ModelFileError naming the path on OS errors."""
-    path = Path(path)
+    path = as_path(path, "path")
     if path.is_dir():
         raise ModelFileError(f"path {str(path)!r} is a folder; give a file name such as "
                              f"{str(path / 'model.json')!r}")
@@ -107,7 +108,7 @@ def _fail(why: str) -> ModelFileError:
 
 def read_json(path) -> dict:
     """Parse a model file (size-limited) into a dict; :func:`decode` checks its fields."""
-    path = Path(path)
+    path = as_path(path, "model file")
     if path.is_dir():
         raise ModelFileError(f"model file {str(path)!r} is a folder, not a file")
     if not path.is_file():

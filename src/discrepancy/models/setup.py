@@ -203,8 +203,10 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
         method, choice = NextSample(), None
     else:
         method = copy.deepcopy(get_differentiation_method(model.differentiation_method))
+        method._validate_params()
         method, choice = _resolved(method, sample)
     optimizer = copy.deepcopy(get_optimizer(model.optimizer))
+    optimizer._validate_params()
     if model.constraints is not None:
         if "constraints" not in optimizer.get_params(deep=False):
             raise ParameterError(f"constraints need an optimizer that takes them (STLSQ); "

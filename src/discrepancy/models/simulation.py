@@ -36,17 +36,18 @@ class _Stop(Exception):
 
 
 def _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws):
-    unknown = sorted(set(solver_kws) - set(SOLVER_OPTIONS if method in ADAPTIVE else ()))
+    adaptive = isinstance(method, str) and method in ADAPTIVE
+    unknown = sorted(set(solver_kws) - set(SOLVER_OPTIONS if adaptive else ()))
     if unknown:
         raise ParameterError(f"simulate got unknown option(s) {unknown} for method "
                              f"{method!r}; valid: method, rtol, atol, u_hold, substeps, "
                              f"max_evaluations, compiled, {', '.join(SOLVER_OPTIONS)} (the last "
                              "ones for adaptive methods)")
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     for name, value in (("rtol", rtol), ("atol", atol)):
         if not isinstance(value, (int, float)) or isinstance(value, bool) or \
-                not np.isfinite(value) or value <= 0:
+                not 0 < value < np.inf:
             raise ParameterError(f"{name} must be a positive number; got {value!r}")
     if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or \
             not 1 <= substeps <= 10_000:

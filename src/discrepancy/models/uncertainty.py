@@ -242,6 +242,7 @@ def simulate_interval(model, x0, t, u, uncertainty, level, n_draws, seed, **inte
     from ..errors import ConvergenceError
 
     _check_uncertainty(model, uncertainty)
+    validate_params("simulate_interval", {"seed": seed}, {"seed": BOOTSTRAP_CONSTRAINTS["seed"]})
     samples = uncertainty.samples
     if n_draws is not None:
         if not isinstance(n_draws, (int, np.integer)) or n_draws < 2:
