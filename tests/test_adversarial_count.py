@@ -1,4 +1,4 @@
-"""The adversarial suite tries 672 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 674 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -15,15 +15,15 @@
 | bootstrap | 20 |
 | model file | 50 |
 | io.load | 40 |
-| stream | 34 |
+| stream | 36 |
 | dask | 11 |
 | cli | 47 |
 | energy | 28 |
 | control | 27 |
 | isolated | 34 |
-| total | 672 |
+| total | 674 |
 
-559 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+561 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
 matches a pattern naming the argument; 113 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 34 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a

@@ -235,6 +235,8 @@ CASES = [
     Case("stream", "HDF5 source of a missing file", lambda: dc.HDF5Source(DIR / "none.h5"), raises(MissingFileError, r"data file '.*none.h5' does not exist")),
     Case("stream", "HDF5 source of a corrupt file", lambda: dc.HDF5Source(write("bad.h5", b"nope")), raises(DataError, r"bad.h5 is not a readable HDF5 file")),
     Case("stream", "HDF5 source without the dataset", lambda: dc.HDF5Source(h5("src.h5", x=X), x="states"), raises(UnknownNameError, r"no dataset 'states' \(for x\)")),
+    Case("stream", "HDF5 source x a group", lambda: dc.HDF5Source(h5("group.h5", **{"run/x": X}), x="run"), raises(UnknownNameError, r"'run' \(for x\) is a group, not a dataset; the file has: run/x")),
+    Case("stream", "HDF5 source x one number", lambda: dc.HDF5Source(h5("one.h5", x=np.float64(3))), raises(ShapeError, r"dataset 'x' \(x\) holds one number")),
     Case("stream", "HDF5 source of a 1-D x", lambda: dc.HDF5Source(h5("flat.h5", x=T)), raises(ShapeError, r"dataset 'x' \(x\) has shape \(300,\)")),
     Case("stream", "HDF5 source paths a number", lambda: dc.HDF5Source(42), raises(ParameterError, r"paths must be a file, a folder or a non-empty list")),
     Case("stream", "NPZ files with x a list", lambda: dc.NPZFiles([npz("good.npz", x=X, t=T)], x=["x"]), raises(ParameterError, r"NPZFiles: x must be a name; got list")),

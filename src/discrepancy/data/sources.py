@@ -92,7 +92,13 @@ class _ArrayFiles(ChunkSource):
             if name not in arrays:
                 raise UnknownNameError(f"{path.name}: no dataset {name!r} (for {field}); the file "
                                        f"has: {', '.join(arrays.available()) or 'nothing'}")
-            shape = arrays[name].shape
+            shape = getattr(arrays[name], "shape", None)
+            if shape is None:
+                raise UnknownNameError(f"{path.name}: {name!r} (for {field}) is a group, not a "
+                                       f"dataset; the file has: {', '.join(arrays.available())}")
+            if len(shape) == 0:
+                raise ShapeError(f"{path.name}: dataset {name!r} ({field}) holds one number; "
+                                 "expected an array with one row per sample")
             if m is None:
                 m = shape[0]
             if shape[0] != m or len(shape) != (1 if field == "t" else 2):
