@@ -5,7 +5,6 @@ import copy
 
 import numpy as np
 
-from ..accumulate import Names
 from ..base import Estimator
 from ..constraints import InstanceOf, Integral, Interval, Predicate, is_callable, validate_params
 from ..data.chunks import data_kind
@@ -16,6 +15,7 @@ from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..symbolic import compile_numpy, feature_name
+from .checks import checked_discrepancy, pairs
 from .setup import FitSetup, resolve_setup
 from .simulation import integrate
 from .term_constraints import Constraints
@@ -199,22 +199,6 @@ class DiscrepancyModel(Estimator):
         self._active_coef = self.coef_[:, active].T
         self._compiled_steps = {}   # CasADi steppers of these coefficients, by substeps
 
-    def _data(self, x, t=None, u=None, x_dot=None, sample_weight=None) -> list[Trajectory]:
-        """Validated trajectories with the columns this fitted model has (for score and
-        bootstrap): ShapeError naming ``x`` or ``u`` before any work otherwise."""
-        self.check_is_fitted()
-        trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
-        first = trajectories[0]
-        if first.x.shape[1] != self.n_states_:
-            raise ShapeError(f"x must have {self.n_states_} columns (the model's states "
-                             f"{self.state_names_}); got shape {first.x.shape}")
-        r = 0 if first.u is None else first.u.shape[1]
-        if r != self.n_inputs_:
-            raise ShapeError(f"u must have {self.n_inputs_} columns (the model's inputs "
-                             f"{self.input_names_}); got "
-                             f"{'none' if first.u is None else first.u.shape}")
-        return trajectories
-
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(Z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m`` ``(m, n)``."""
         self.check_is_fitted()
@@ -243,33 +227,20 @@ class DiscrepancyModel(Estimator):
         theta = np.column_stack([f(z) for f in self._active_terms])
         return theta @ self._active_coef
 
-    def _checked_g(self, z: np.ndarray) -> np.ndarray:
-        """``g(z)``, or FeatureError naming the first active term that is not finite."""
-        with np.errstate(all="ignore"):
-            g = self._g(z)
-        if not np.all(np.isfinite(g)):
-            from ..accumulate import not_finite
-            active = np.flatnonzero(np.any(self.coef_ != 0, axis=0))
-            theta = np.column_stack([f(z) for f in self._active_terms])
-            names = self.get_feature_names()
-            raise not_finite(theta.T, z, 0, len(active), Names(
-                [names[j] for j in active], self.variable_names_))
-        return g
-
     def discrepancy(self, x, u=None) -> np.ndarray:
         """The learned correction ``g(x, u)``, ``(m, n)`` (a list for a list of ``x``)."""
         if isinstance(x, (list, tuple)):
-            return [self.discrepancy(xi, ui) for xi, ui in _pairs(x, u)]
+            return [self.discrepancy(xi, ui) for xi, ui in pairs(x, u)]
         x, u = self._variables(x, u)
-        return self._checked_g(x if u is None else np.hstack([x, u]))
+        return checked_discrepancy(self, x if u is None else np.hstack([x, u]))
 
     def predict(self, x, u=None) -> np.ndarray:
         """Hybrid model derivatives ``f_m(x, u) + g(x, u)``, ``(m, n)``; a list of ``x``
         (and of ``u``) gives a list, as in PySINDy."""
         if isinstance(x, (list, tuple)):
-            return [self.predict(xi, ui) for xi, ui in _pairs(x, u)]
+            return [self.predict(xi, ui) for xi, ui in pairs(x, u)]
         x, u = self._variables(x, u)
-        return self.prior_(x, u) + self._checked_g(x if u is None else np.hstack([x, u]))
+        return self.prior_(x, u) + checked_discrepancy(self, x if u is None else np.hstack([x, u]))
 
     @property
     def complexity(self) -> int:
@@ -479,19 +450,6 @@ class DiscrepancyModel(Estimator):
         destroys an existing file)."""
         from .model_file import write_json
         write_json(path, self.to_state())
-
-
-def _pairs(x: list, u):
-    """``(x_i, u_i)`` of a list of trajectories (``u`` a matching list or None)."""
-    if any(np.ndim(xi) == 0 for xi in x):
-        raise ShapeError("x is a list holding numbers; a list means one array per trajectory: "
-                         "pass one trajectory as a 2-D array, np.array(x), of shape (samples, "
-                         "states)")
-    if u is None:
-        return [(xi, None) for xi in x]
-    if not isinstance(u, (list, tuple)) or len(u) != len(x):
-        raise ShapeError(f"u must be a list of {len(x)} arrays like x; got {describe(u)}")
-    return list(zip(x, u, strict=True))
 
 
 def load_model(path, prior=None, *, functions=None) -> DiscrepancyModel:

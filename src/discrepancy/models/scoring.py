@@ -6,6 +6,7 @@ import numpy as np
 from ..accumulate import not_finite
 from ..errors import DataError, ParameterError, ShapeError, describe
 from ..resources import check_memory, n_bytes
+from .checks import model_data
 
 METRICS = ("r2", "rmse", "trajectory")
 
@@ -15,7 +16,7 @@ def score(model, x, t=None, u=None, x_dot=None, *, metric="r2") -> float:
     if not callable(metric) and not (isinstance(metric, str) and metric in METRICS):
         raise ParameterError(f"metric must be one of {', '.join(METRICS)} or a callable "
                              f"metric(truth, prediction) -> float; got {metric!r}")
-    trajectories = model._data(x, t, u, x_dot)
+    trajectories = model_data(model, x, t, u, x_dot)
     if metric == "trajectory":
         if len(trajectories) != 1:
             raise ShapeError("metric='trajectory' scores one trajectory; got "

@@ -27,6 +27,7 @@ from ..constraints import InstanceOf, Integral, Interval, Options, validate_para
 from ..errors import ParameterError
 from ..optimizers import GramStatistics
 from ..resources import check_memory, n_bytes
+from .checks import model_data
 
 BOOTSTRAP_CONSTRAINTS = {
     "n_resamples": [Interval(Integral, 2)], "method": [Options(("wild", "pairs"))],
@@ -99,7 +100,7 @@ def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int 
                                      or segment % block_length):
         raise ParameterError(f"block_length must be an integer >= 2 that divides the fit's "
                              f"cross-validation segment ({segment} rows); got {block_length!r}")
-    trajectories = model._data(x, t, u, x_dot, sample_weight)
+    trajectories = model_data(model, x, t, u, x_dot, sample_weight)
     total = sum(tr.n_samples for tr in trajectories)
     length = block_length or _default_block(total, segment, setup.differentiation.halo or 0)
     p = setup.n_features
