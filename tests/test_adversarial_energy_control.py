@@ -78,7 +78,6 @@ CASES = [
     Case("energy", "interval of a number", lambda: FITTED.predict_interval(Q, T, 3, dq=DQ), raises(ParameterError, r"uncertainty must be this model's bootstrap")),
     Case("energy", "predict before fit", lambda: dissipation().predict(Q, T, dq=DQ), raises(NotFittedError, r"fit\(q, t\)")),
     Case("energy", "state form without a library", lambda: dc.EnergyDiscrepancy(energy=H, optimizer=dc.STLSQ()).fit(Q, T, dq=DQ), raises(ParameterError, r"feature_library must be a feature library")),
-    Case("energy", "state form with a 10**9-frequency library", lambda: state_form(feature_library=dc.FourierLibrary(10**9)).fit(Q, T, dq=DQ), raises(ResourceError, r"columns; at most 50,000")),
     Case("energy", "viscous friction recovered", lambda: FITTED.identified_terms(), returns(lambda terms: len(terms) == 1 and terms[0]["name"] == "viscous joint 1" and abs(terms[0]["coefficient"] - 0.1) < 1e-4)),
     # --- control
     Case("control", "model a number", lambda: as_casadi(3), raises(ParameterError, r"model must be a casadi.Function")),
@@ -87,9 +86,7 @@ CASES = [
     Case("control", "negative horizon", lambda: plan(T=-1), raises(ParameterError, r"plan_trajectory: T must be a finite number > 0; got -1")),
     Case("control", "horizon a word", lambda: plan(T="long"), raises(ParameterError, r"T must be")),
     Case("control", "1 interval", lambda: plan(n_intervals=1), raises(ParameterError, r"plan_trajectory: n_intervals must be an integer >= 2; got 1")),
-    Case("control", "10**9 intervals", lambda: plan(n_intervals=10**9), raises(ResourceError, r"1000000000 intervals")),
     Case("control", "substeps 0", lambda: plan(substeps=0), raises(ParameterError, r"substeps must be")),
-    Case("control", "substeps 10**7", lambda: plan(substeps=10**7), raises(ParameterError, r"substeps must be")),
     Case("control", "x0 of 3 states", lambda: plan(x0=[0, 0, 0]), raises(ShapeError, r"x0 must have 2 entries")),
     Case("control", "xf with NaN", lambda: plan(xf=[np.nan, 0]), raises(ParameterError, r"xf must be finite")),
     Case("control", "Q of the wrong size", lambda: plan(Q=[1, 2, 3]), raises(ShapeError, r"Q must have 2 entries")),

@@ -50,6 +50,17 @@ def cli(*argv):
     lines = run.stderr.strip().splitlines()
     return run.returncode if len(lines) == 1 and lines[0].startswith("error: ") else run.stderr
 
+def names(n):
+    return [f"v{i}" for i in range(n)]
+
+def plan(**kw):
+    import casadi as ca
+    from discrepancy.control import plan_trajectory
+    x, u = ca.SX.sym("x", 2), ca.SX.sym("u", 1)
+    double = ca.Function("f", [x, u], [ca.vertcat(x[1], u)])
+    return plan_trajectory(double, **{"x0": [0, 0], "xf": [1, 0], "T": 1.0, "n_intervals": 10,
+                                      **kw})
+
 def sign_model():
     v = np.linspace(-2, 2, 401)[:, None]
     lib = dc.CustomLibrary([sp.sign(symbol("x1"))])
@@ -70,6 +81,20 @@ CASES = [
     Case("isolated", "fit: weak form of 10**6 samples and 1771 columns", "dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(3), differentiation_method=dc.WeakForm(61), optimizer=dc.STLSQ(threshold=0.1)).fit(wide(20, 10**6), 0.01)", raises(ResourceError, r"weak form's integrals of 1000000 samples and 1771 columns")),
     Case("isolated", "bootstrap: blocks of 2 rows of 252 columns", "dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(5), differentiation_method=FD, optimizer=dc.STLSQ(threshold=0.1)).fit(wide(5, 20000), 0.01, x_dot=wide(5, 20000)).bootstrap(wide(5, 20000), 0.01, x_dot=wide(5, 20000), block_length=2, n_resamples=2)", raises(ResourceError, r"bootstrap's statistics of about 10000 blocks of 252 columns")),
     Case("isolated", "bootstrap: interval of 10**6 samples x 5000 resamples", "(lambda m: m.predict_interval(np.zeros((10**6, 2)), uncertainty=m.bootstrap(X, 0.01, x_dot=XD, n_resamples=5000)))(fit(x_dot=XD))", raises(ResourceError, r"5000 resampled predictions of 1000000 samples")),
+    Case("isolated", "library alone: degree 10**20 on 10 variables", "dc.PolynomialLibrary(10**20).fit(names(10))", raises(ResourceError, r"PolynomialLibrary\(degree=100000000000000000000\) of 10 variables would have about 10\^")),
+    Case("isolated", "library alone: degree 3 on 400 variables", "dc.PolynomialLibrary(3).fit(names(400))", raises(ResourceError, r"of 400 variables would have 10,827,401 columns")),
+    Case("isolated", "library alone: degree 10 on 50 variables", "dc.PolynomialLibrary(10).fit(names(50))", raises(ResourceError, r"75,394,027,566 columns; at most 50,000")),
+    Case("isolated", "library alone: degree 5 on 20 variables", "dc.PolynomialLibrary(5).fit(names(20))", raises(ResourceError, r"53,130 columns")),
+    Case("isolated", "library alone: degree 30 on 10 variables", "dc.PolynomialLibrary(30).fit(names(10))", raises(ResourceError, r"847,660,528 columns")),
+    Case("isolated", "library alone: degree 10**9, powers only", "dc.PolynomialLibrary(10**9, include_interaction=False).fit(['x1'])", raises(ResourceError, r"1,000,000,001 columns")),
+    Case("isolated", "library alone: degree 10**20 of distinct products", "dc.PolynomialLibrary(10**20, interaction_only=True).fit(['a', 'b', 'c']).n_features_", returns(lambda v: v == "8")),
+    Case("isolated", "library alone: 10**9 Fourier frequencies", "dc.FourierLibrary(10**9).fit(['a', 'b'])", raises(ResourceError, r"FourierLibrary\(n_frequencies=1000000000\) of 2 variables would have 4,000,000,000")),
+    Case("isolated", "library alone: product of 600 x 600 columns", "(dc.FourierLibrary(300) * dc.FourierLibrary(300)).fit(['a'])", raises(ResourceError, r"would have 360,000 columns")),
+    Case("isolated", "library alone: spec fourier(1000000000)", "dc.libraries.spec.parse_library('fourier(1000000000)').fit(['a', 'b'])", raises(ResourceError, r"4,000,000,000 columns")),
+    Case("isolated", "library alone: spec poly(99999999999999999999)", "dc.libraries.spec.parse_library('poly(99999999999999999999)').fit(['a', 'b'])", raises(ResourceError, r"about 10\^\d+ columns")),
+    Case("isolated", "energy: state form with a 10**9-frequency library", "dc.EnergyDiscrepancy(energy=lambda s: (s ** 2).sum(1), feature_library=dc.FourierLibrary(10**9), optimizer=dc.STLSQ()).fit(X[:, :1], T, dq=X[:, 1:])", raises(ResourceError, r"columns; at most 50,000")),
+    Case("isolated", "control: plan of 10**9 intervals", "plan(n_intervals=10**9)", raises(ResourceError, r"a plan of 1000000000 intervals would need")),
+    Case("isolated", "control: plan with 10**7 substeps", "plan(substeps=10**7)", raises(ParameterError, r"plan_trajectory: substeps must be an integer >= 1 and <= 10000")),
     Case("isolated", "simulate: map for 10**12 steps", "dc.DiscrepancyModel(discrete_time=True).fit(X).simulate([0.0, 1.0], 10**12)", raises(ResourceError, r"1000000000000 steps x 2 states")),
     Case("isolated", "simulate: learned sign term, adaptive method", "sign_model().simulate([1.0], np.linspace(0, 2, 201), method='RK45')", raises(SimulationError, r"stopped at t = 1\.0\d* of 2 .*the budget of \d+ right-hand-side evaluations is spent")),
     Case("isolated", "simulate: learned sign term, default method", "float(sign_model().simulate([1.0], np.linspace(0, 2, 201))[50, 0])", returns(lambda v: abs(float(v) - 0.5) < 1e-9)),

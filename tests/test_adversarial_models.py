@@ -134,7 +134,6 @@ CASES = [
     Case("simulate", "negative atol", lambda: sim(atol=-1), raises(ParameterError, r"atol must be a positive number; got -1")),
     Case("simulate", "rtol 0", lambda: sim(rtol=0), raises(ParameterError, r"rtol must be a positive number")),
     Case("simulate", "substeps 0", lambda: sim(method="rk4", substeps=0), raises(ParameterError, r"substeps must be an integer in \[1, 10000\]")),
-    Case("simulate", "substeps 10**6", lambda: sim(method="rk4", substeps=10**6), raises(ParameterError, r"substeps must be an integer in")),
     Case("simulate", "max_evaluations 0", lambda: sim(max_evaluations=0), raises(ParameterError, r"max_evaluations must be a positive integer")),
     Case("simulate", "max_evaluations True", lambda: sim(max_evaluations=True), raises(ParameterError, r"max_evaluations must be a positive integer")),
     Case("simulate", "unknown option", lambda: sim(foo=1), raises(ParameterError, r"unknown option\(s\) \['foo'\]")),
