@@ -24,9 +24,11 @@ import os
 import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import FeatureError
 from .optimizers.gram import GramStatistics
 
 BLOCK_ROWS = 4096
@@ -77,6 +79,14 @@ def default_threads() -> int:
     return max(1, min(LANES, cpus))
 
 
+def statistics_bytes(p: int, n: int, n_folds: int = 5) -> int:
+    """Bytes a fit's statistics of ``p`` columns and ``n`` targets take at their peak: the
+    total and :data:`LANES` running lanes, each with its folds, a few solver copies, and one
+    Θ block per thread."""
+    copies = (LANES + 1) * (n_folds + 1) + 4
+    return 8 * (copies * p * (p + n) + LANES * BLOCK_ROWS * (p + n))
+
+
 class BlockAccumulator:
     """Running Gram statistics of ``Θ = transform(z)`` against targets ``y``.
 
@@ -86,6 +96,8 @@ class BlockAccumulator:
         total: the statistics to add to (its folds, if any, say how rows are dealt out);
             the next row added is data row ``total.count``.
         n_threads: threads to use (default :func:`default_threads`); does not change the result.
+        names: the columns' and variables' names, for the message when a column is not
+            finite (:class:`Names`).
 
     Feed rows of one trajectory with :meth:`add`; every call but the last of a
     trajectory must hold a whole number of blocks (:class:`~discrepancy.streaming`
@@ -93,8 +105,8 @@ class BlockAccumulator:
     """
 
     def __init__(self, transform: Callable[[np.ndarray], np.ndarray], total: GramStatistics,
-                 *, n_threads: int | None = None):
-        self.transform = transform
+                 *, n_threads: int | None = None, names: Names | None = None):
+        self.transform, self.names = transform, names
         self.total = total
         self.p, self.n = total.p, total.n
         self.n_threads = default_threads() if n_threads is None else max(1, int(n_threads))
@@ -152,10 +164,12 @@ class BlockAccumulator:
                 buffer[:, :k] *= root
                 sb = sb * root[:, None]
             if lane.folds is None:
-                _add_product(lane, buffer[:, :k], sb, p)
-                continue
-            for lo, hi, fold in lane.pieces(first + s, k):
-                _add_product(lane.folds[fold], buffer[:, lo:hi], sb[lo:hi], p)
+                finite = _add_product(lane, buffer[:, :k], sb, p)
+            else:
+                finite = all([_add_product(lane.folds[fold], buffer[:, lo:hi], sb[lo:hi], p)
+                              for lo, hi, fold in lane.pieces(first + s, k)])
+            if not finite:
+                raise not_finite(buffer[:, :k], zb, first + s, p, self.names)
 
     def finish_trajectory(self) -> None:
         """Add the lanes of the current trajectory to :attr:`total`, in lane order."""
@@ -166,22 +180,63 @@ class BlockAccumulator:
         self._new_lanes()
 
 
-def _add_product(stats: GramStatistics, a: np.ndarray, signal: np.ndarray, p: int) -> None:
+def _add_product(stats: GramStatistics, a: np.ndarray, signal: np.ndarray, p: int) -> bool:
+    """Add the sums of ``a = [Θ | y]ᵀ``; returns whether they are finite (every column of
+    ``a`` is finite and its squares do not overflow exactly when ``a aᵀ``'s diagonal is)."""
     g = a @ a.T
     stats.gram += g[:p, :p]
     stats.rhs += g[:p, p:]
     stats.yy += np.diagonal(g[p:, p:])
     stats.signal += np.einsum("ij,ij->j", signal, signal)
     stats.count += a.shape[1]
+    return bool(np.all(np.isfinite(np.diagonal(g))))
+
+
+def not_finite(block: np.ndarray, z: np.ndarray, row: int, p: int,
+               names: Names | None) -> FeatureError:
+    """The error naming the first column of ``block`` (``[Θ | y]ᵀ`` ``(p + n, k)`` of data
+    rows ``row...`` with variables ``z``) that is not finite, or whose squares overflow."""
+    names = names or Names([f"column {j}" for j in range(p)], [])
+    bad = ~np.isfinite(block)
+    if bad.any():
+        i, j = (int(v) for v in np.argwhere(bad.T)[0])
+        what = f"library column {names.columns[j]!r}" if j < p else \
+            f"the target of equation {j - p} (x_dot - prior)"
+        at = names.values(z[i]) if j < p else ""
+        return FeatureError(f"{what} is {block[j, i]} at row {row + i}{at}: the term is "
+                            "undefined or overflows there (remove the term, or those rows)")
+    with np.errstate(over="ignore"):
+        j = int(np.argmax(~np.isfinite(np.einsum("ij,ij->i", block, block))))
+    what = f"library column {names.columns[j]!r}" if j < p else f"the target of equation {j - p}"
+    return FeatureError(f"{what} overflows: the sum of its squares over rows {row}.."
+                        f"{row + block.shape[1] - 1} exceeds 1.8e308 (largest magnitude "
+                        f"{np.max(np.abs(block[j])):.3g}). Scale the data or use a smaller "
+                        "library")
+
+
+@dataclass(frozen=True)
+class Names:
+    """Names of Θ's columns and of the variables ``z`` (empty when ``z`` is not variables,
+    as in the weak form), for messages."""
+
+    columns: list[str]
+    variables: list[str]
+
+    def values(self, z_row: np.ndarray) -> str:
+        """`` (x1 = -0.5, x2 = 1)`` for one row of ``z``."""
+        if len(self.variables) != len(z_row):
+            return ""
+        return " (" + ", ".join(f"{n} = {v:.6g}" for n, v in zip(self.variables, z_row,
+                                                                 strict=True)) + ")"
 
 
 def accumulate(stats: GramStatistics, transform, z: np.ndarray, y: np.ndarray,
                signal: np.ndarray | None = None, weight: np.ndarray | None = None, *,
-               n_threads: int | None = None) -> GramStatistics:
+               n_threads: int | None = None, names: Names | None = None) -> GramStatistics:
     """Add the statistics of one whole trajectory's rows ``z``, ``y`` (derivatives
     ``signal``, row weights ``weight``) to ``stats`` in place; its rows follow the
     ``stats.count`` rows before."""
-    acc = BlockAccumulator(transform, stats, n_threads=n_threads)
+    acc = BlockAccumulator(transform, stats, n_threads=n_threads, names=names)
     acc.add(z, y, signal, weight)
     acc.finish_trajectory()
     return stats

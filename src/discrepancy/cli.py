@@ -111,6 +111,7 @@ def _no_paper_package(args) -> int:
 
 def cmd_fit(args) -> None:
     from . import DiscrepancyModel
+    from .errors import ParameterError
     from .io import load
 
     data = load(args.data, states=args.states.split(",") if args.states else None,
@@ -120,6 +121,11 @@ def cmd_fit(args) -> None:
         feature_library=args.library, optimizer=args.optimizer,
         differentiation_method=args.differentiation,
         state_names=data.state_names, input_names=data.input_names or None)
+    if args.dt is not None and (not np.isfinite(args.dt) or args.dt <= 0):
+        raise ParameterError(f"--dt must be a positive time step; got {args.dt}")
+    if args.dt is not None and data.t is not None:
+        raise ParameterError(f"--dt {args.dt} was given but {args.data} has a time column "
+                             "'t'; give one or the other")
     t = data.t if data.t is not None else args.dt
     model.fit(data.x, t=t, u=data.u)
     model.print()
@@ -193,7 +199,8 @@ def cmd_show(args) -> None:
     from . import DiscrepancyModel
 
     doc, callable_prior = _stored(args.model)
-    functions = {name: _placeholder_prior for name in doc.get("user_functions", [])
+    declared = doc.get("user_functions", []) if isinstance(doc, dict) else []
+    functions = {name: _placeholder_prior for name in declared
                  if isinstance(name, str)}  # names only: show evaluates nothing
     model = DiscrepancyModel.from_state(doc, prior=_placeholder_prior if callable_prior
                                         else None, functions=functions)
@@ -206,8 +213,15 @@ def cmd_show(args) -> None:
         print(model.to_latex(precision=max(args.precision, 1), part=part))
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors on one line (exit code 2), like every other error."""
+
+    def error(self, message):
+        self.exit(2, f"error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="discrepancy", epilog=EPILOG,
+    p = _Parser(prog="discrepancy", epilog=EPILOG,
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 description="Learn sparse discrepancy models f_m + g with SINDy.")
     sub = p.add_subparsers(dest="command", required=True)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ._optional import require
 from .accumulate import BlockAccumulator
-from .data.chunks import step_of
+from .data.chunks import ChunkSource, step_of
 from .data.trajectory import Trajectory
 from .data.validation import check_array
 from .errors import ParameterError, ShapeError, describe
@@ -51,7 +51,7 @@ def _block(rows, x, *rest, setup, step, halo, n_total, trajectory, offset):
     z, y, xd = (a[lo:hi] for a in setup.rows(Trajectory(t, x, u, xd)))
     stats = setup.new_statistics()
     stats.count = offset + int(rows[lo])  # the data row of this block's first row (folds)
-    acc = BlockAccumulator(setup.transform, stats, n_threads=1)
+    acc = BlockAccumulator(setup.transform, stats, n_threads=1, names=setup.names)
     acc.add(z, y, xd)
     acc.finish_trajectory()
     stats.count -= offset + int(rows[lo])
@@ -212,6 +212,10 @@ def fit_sources(model, sources, *, t=None):
     sources = list(sources)
     if not sources:
         raise ShapeError("sources must hold at least one ChunkSource; got an empty list")
+    bad = [i for i, s in enumerate(sources) if not isinstance(s, ChunkSource)]
+    if bad:
+        raise ParameterError(f"sources[{bad[0]}] must be a ChunkSource (HDF5Source, NPZFiles, "
+                             f"...); got {describe(sources[bad[0]])}")
     from .streaming import setup_from_source
 
     setup = setup_from_source(model, sources[0], step_of(t))

@@ -35,6 +35,20 @@ class PriorError(DiscrepancyError, ValueError):
     """The prior model f_m returned something unusable (wrong shape, NaN)."""
 
 
+class FeatureError(DiscrepancyError, ValueError):
+    """A library term could not be evaluated on the data (it raised, or gave NaN/inf);
+    the message names the term and the first bad row."""
+
+
+class ResourceError(DiscrepancyError, MemoryError):
+    """The work asked for would not fit in memory (or exceeds a size limit); refused before
+    anything large is allocated. The message says how big and what to do instead."""
+
+
+class MissingFileError(DiscrepancyError, FileNotFoundError):
+    """A file or folder given by path does not exist (also a ``FileNotFoundError``)."""
+
+
 class ModelFileError(DiscrepancyError, ValueError):
     """A model file is not valid JSON of a known version, or was tampered with."""
 
@@ -86,3 +100,9 @@ def describe(value) -> str:
     if isinstance(value, (list, tuple)):
         return f"{type(value).__name__} of length {len(value)}"
     return repr(value) if isinstance(value, (int, float, str, type(None))) else type(value).__name__
+
+
+def short_repr(text, limit: int = 80) -> str:
+    """``repr(text)`` for messages, cut to ``limit`` characters."""
+    shown = repr(text)
+    return shown if len(shown) <= limit else shown[:limit - 3] + "..."

@@ -14,7 +14,7 @@ import ast
 import math
 from collections.abc import Mapping
 
-from .errors import ParameterError, UnknownNameError, describe
+from .errors import ParameterError, UnknownNameError, describe, short_repr
 
 __all__ = ["Registry", "parse_spec"]
 
@@ -64,6 +64,12 @@ class Registry:
             raise UnknownNameError(f"{self.argument} must be a {self.kind} object or one of "
                                    f"{', '.join(self.names())}; got {describe(spec)}")
         cls = self.get(name)
+        valid = cls._param_defaults()
+        unknown = sorted((set(given) | set(params)) - set(valid))
+        if unknown:
+            raise ParameterError(f"{self.argument} {name!r}: {cls.__name__} has no parameter "
+                                 f"{', '.join(map(repr, unknown))}; valid parameters: "
+                                 f"{', '.join(valid) or 'none'}")
         try:
             obj = cls(**{**given, **params})
         except TypeError as e:
@@ -106,32 +112,39 @@ def _from_mapping(spec: Mapping, argument: str) -> tuple[str, dict]:
     return spec["name"], dict(spec["params"])
 
 
+#: longest spec text accepted (a spec is a name and a few keyword arguments)
+MAX_SPEC = 10_000
+
+
 def parse_spec(text: str, argument: str = "spec") -> tuple[str, dict]:
     """``"name"`` or ``"name(key=value, ...)"`` -> ``(name, {key: value})``.
 
     Values must be Python literals (numbers, strings, True/False/None, lists/tuples of
     them); a bare identifier such as ``auto`` is read as the string ``"auto"``.
     """
+    if len(text) > MAX_SPEC:
+        raise ParameterError(f"{argument} spec {short_repr(text)} has {len(text)} characters; at "
+                             f"most {MAX_SPEC}")
     try:
         tree = ast.parse(text.strip(), mode="eval").body
-    except SyntaxError:
-        raise ParameterError(f"{argument} {text!r} is not 'name' or 'name(key=value, ...)'") \
-            from None
+    except (SyntaxError, RecursionError, MemoryError, ValueError):
+        raise ParameterError(f"{argument} {short_repr(text)} is not 'name' or "
+                             "'name(key=value, ...)'") from None
     if isinstance(tree, ast.Name):
         return tree.id, {}
     if not (isinstance(tree, ast.Call) and isinstance(tree.func, ast.Name)) or tree.args:
-        raise ParameterError(f"{argument} {text!r} must be 'name' or 'name(key=value, ...)' "
-                             "with keyword arguments only")
+        raise ParameterError(f"{argument} {short_repr(text)} must be 'name' or "
+                             "'name(key=value, ...)' with keyword arguments only")
     params = {}
     for kw in tree.keywords:
         if kw.arg is None:
-            raise ParameterError(f"{argument} {text!r}: '**' is not allowed")
+            raise ParameterError(f"{argument} {short_repr(text)}: '**' is not allowed")
         if isinstance(kw.value, ast.Name):
             params[kw.arg] = kw.value.id
             continue
         try:
             params[kw.arg] = ast.literal_eval(kw.value)
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
-            raise ParameterError(f"{argument} {text!r}: the value of {kw.arg} must be a "
+            raise ParameterError(f"{argument} {short_repr(text)}: the value of {kw.arg} must be a "
                                  "literal (number, string, True/False/None)") from None
     return tree.func.id, params

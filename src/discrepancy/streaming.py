@@ -150,7 +150,8 @@ def stream_statistics(source: ChunkSource, step: float, setup_for: Callable, *,
     sample, trajectories = _prefetch(source, step, max(sample_rows, 1))
     layout = sample[0][0]
     setup = setup_for(layout.n, layout.r, [_joined(chunks) for _, chunks, _ in sample])
-    acc = BlockAccumulator(setup.transform, setup.new_statistics(), n_threads=n_threads)
+    acc = BlockAccumulator(setup.transform, setup.new_statistics(), n_threads=n_threads,
+                           names=setup.names)
     feeder = _RowFeeder(acc)
     with tqdm(total=source.n_samples, unit=" samples", unit_scale=True, desc="fit",
               disable=None if progress is None else not progress) as bar:

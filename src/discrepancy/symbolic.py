@@ -63,7 +63,10 @@ def adopt(expr, names: Sequence[str], *, label: str) -> sp.Expr:
 
 
 def _number(expr) -> float:
-    return float(expr)
+    value = complex(expr)
+    if value.imag != 0 or not np.isfinite(value.real):
+        raise ExportError(f"the constant {expr} is not a finite real number")
+    return value.real
 
 
 def compile_numpy(expr: sp.Expr, names: Sequence[str],
@@ -105,8 +108,7 @@ def compile_numpy(expr: sp.Expr, names: Sequence[str],
         if name in NARY_FUNCTIONS:
             return lambda Z: _reduce(NARY_FUNCTIONS[name][1], args, Z)
         if isinstance(e, sp.core.function.AppliedUndef) and name in functions:
-            f = functions[name]
-            return lambda Z: np.asarray(f(*[a(Z) for a in args]), dtype=float)
+            return _user_call(name, functions[name], args)
         raise ExportError(f"cannot evaluate {e} numerically: {name} is not a supported function "
                           f"(supported: {', '.join(sorted(FUNCTIONS))}, or user functions "
                           f"{sorted(functions)})")
@@ -114,6 +116,25 @@ def compile_numpy(expr: sp.Expr, names: Sequence[str],
     if not isinstance(expr, sp.Basic):
         raise ExportError(f"expected a sympy expression, got {type(expr).__name__}")
     return build(expr)
+
+
+def _user_call(name: str, f: Callable, args: list[Callable]) -> Callable:
+    """``Z -> f(*args(Z))`` for a user's numpy function, its failures named (FeatureError)."""
+    from .errors import FeatureError
+
+    def call(Z):
+        try:
+            value = f(*[a(Z) for a in args])
+        except Exception as e:
+            raise FeatureError(f"user function {name!r} raised {type(e).__name__}: {e}") from e
+        if np.iscomplexobj(value):
+            raise FeatureError(f"user function {name!r} returned complex values")
+        try:
+            return np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise FeatureError(f"user function {name!r} must return numbers; got "
+                               f"{type(value).__name__}") from None
+    return call
 
 
 def _reduce(op, fs, Z):

@@ -13,8 +13,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ..errors import ConvergenceError, ParameterError, ShapeError
+from ..constraints import Integral, Interval, Real, validate_params
+from ..data.validation import as_float_array, check_array, check_times
+from ..errors import ConvergenceError, ParameterError, ShapeError, describe
+from ..resources import check_memory, n_bytes
 
+REPLAY_CONSTRAINTS = {"samples": [Interval(Integral, 1)],
+                      "rtol": [Interval(Real, 0, closed="neither")],
+                      "atol": [Interval(Real, 0, closed="neither")]}
 #: Default success of reaching an upright target (angles 0): angles within 0.05 rad, rates 0.2.
 ANGLE_TOL = 0.05
 RATE_TOL = 0.2
@@ -47,6 +53,10 @@ def swing_up_errors(x_final, *, angles, rates, angle_tol: float = ANGLE_TOL,
     to [-pi, pi)) of the state indices ``angles`` and ``|rate|`` of the indices ``rates``,
     keyed by index, and whether all meet the tolerances (``"success"``)."""
     x = np.asarray(x_final, dtype=float).ravel()
+    for name, indices in (("angles", angles), ("rates", rates)):
+        if not all(isinstance(i, (int, np.integer)) and -len(x) <= i < len(x) for i in indices):
+            raise ShapeError(f"{name} must be indices of the {len(x)} states; got "
+                             f"{list(indices)}")
     ang = np.abs((x[list(angles)] + np.pi) % (2 * np.pi) - np.pi)
     rate = np.abs(x[list(rates)])
     out = {f"angle_{i}": float(a) for i, a in zip(angles, ang, strict=True)}
@@ -101,6 +111,16 @@ def interval_defects(model, plan, *, rtol=1e-12, atol=1e-14) -> np.ndarray:
                      for k in range(len(plan.u))])
 
 
+def _feedback(law, k: int, x: np.ndarray) -> np.ndarray:
+    """``law(k, x)`` as a float vector, or ParameterError naming the law and the step."""
+    try:
+        value = law(k, x)
+    except Exception as e:
+        raise ParameterError(f"law raised {type(e).__name__} at step {k}: {e}") from e
+    return check_array(f"law(k, x) at step {k}", np.reshape(as_float_array("law(k, x)", value),
+                                                            (1, -1)))[0]
+
+
 def replay(model, x0, t, law, *, samples=1, rtol=1e-12, atol=1e-14) -> Run:
     """Simulate ``model`` from ``x0`` on grid ``t`` under a held input law.
 
@@ -114,14 +134,19 @@ def replay(model, x0, t, law, *, samples=1, rtol=1e-12, atol=1e-14) -> Run:
         samples: output samples per interval (for plots and identification).
         rtol, atol: ODE tolerances.
     """
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or len(t) < 2 or np.any(np.diff(t) <= 0):
-        raise ShapeError(f"t must be increasing grid times (N+1,); got shape {t.shape}")
+    validate_params("replay", {"samples": samples, "rtol": rtol, "atol": atol},
+                    REPLAY_CONSTRAINTS)
+    if np.ndim(t) != 1 or np.size(t) < 2:
+        raise ShapeError(f"t must be increasing grid times (N+1,); got {describe(t)}")
+    t = check_times("t", t, np.size(t))
     dts = np.diff(t)
     if np.ptp(dts) > 1e-9 * dts[0]:
         raise ParameterError("t must be uniformly spaced (a plan's grid)")
-    x0 = np.asarray(x0, dtype=float).ravel()
+    x0 = check_array("x0", np.reshape(x0, (1, -1)))[0]
     n_int = len(t) - 1
+    check_memory(f"the replay's dense output ({n_int} intervals x {samples + 1} samples x "
+                 f"{len(x0)} states)", n_bytes((n_int, samples + 1, len(x0))),
+                 "Ask for fewer samples per interval")
     if callable(law):
         feedback, table = law, None
     else:
@@ -136,8 +161,7 @@ def replay(model, x0, t, law, *, samples=1, rtol=1e-12, atol=1e-14) -> Run:
     xs = [x0]
     us, dense = [], []
     for k in range(n_int):
-        uk = np.asarray(table[k] if feedback is None else feedback(k, xs[-1]), dtype=float)
-        uk = uk.ravel()
+        uk = table[k] if feedback is None else _feedback(feedback, k, xs[-1])
         seg = step(xs[-1], uk)
         if not np.all(np.isfinite(seg)):
             raise ConvergenceError(f"replay diverged on interval {k} (t = {t[k]:.3f} s)")

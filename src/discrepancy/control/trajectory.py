@@ -16,12 +16,22 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ..constraints import Integral, Interval, Real, validate_params
 from ..errors import ConvergenceError, InfeasibleError, ParameterError, ShapeError
+from ..resources import check_memory, n_bytes
 from .dynamics import as_casadi
 from .limits import Limits
 from .shooting import Problem, build, solver_options
 
 COSTS = ("tracking", "effort")
+PLAN_CONSTRAINTS = {"T": [Interval(Real, 0, closed="neither")],
+                    "n_intervals": [Interval(Integral, 2)],
+                    "substeps": [Interval(Integral, 1, 10_000)],
+                    "max_iter": [Interval(Integral, 1)],
+                    "tol": [Interval(Real, 0, closed="neither")]}
+#: bytes of the NLP per interval and squared state-plus-input size (CasADi's expression graph
+#: and IPOPT's derivative matrices; an estimate, for refusing absurd sizes before building)
+NLP_BYTES_PER_ENTRY = 1000
 PAPER_Q = (10.0, 10.0, 20.0, 1.0, 1.0, 0.1)
 PAPER_R = 1.0
 
@@ -128,9 +138,12 @@ def plan_trajectory(model, *, x0, xf, T=2.7, n_intervals=135, substeps=4, cost="
     n, r = f.size1_in(0), f.size1_in(1)
     if cost not in COSTS:
         raise ParameterError(f"cost must be one of {COSTS}; got {cost!r}")
-    if not (np.isfinite(T) and T > 0) or not (isinstance(n_intervals, int) and n_intervals >= 2):
-        raise ParameterError(f"need T > 0 and integer n_intervals >= 2; got T={T!r}, "
-                             f"n_intervals={n_intervals!r}")
+    validate_params("plan_trajectory", {"T": T, "n_intervals": n_intervals,
+                                        "substeps": substeps, "max_iter": max_iter, "tol": tol},
+                    PLAN_CONSTRAINTS)
+    check_memory(f"a plan of {n_intervals} intervals", n_bytes((n_intervals, (n + r) ** 2,
+                                                                  NLP_BYTES_PER_ENTRY)),
+                 "Use fewer n_intervals")
     if limits is not None and (x_bounds is not None or u_bounds is not None
                                or du_max is not None):
         raise ParameterError("give limits, or x_bounds/u_bounds/du_max, not both")

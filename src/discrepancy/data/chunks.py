@@ -189,6 +189,10 @@ def data_kind(x) -> str:
     """How ``fit`` receives ``x``: ``"dask"`` (dask arrays, or a list of them), ``"chunks"``
     (an iterator of chunks, a ChunkSource, or a list of those) or ``"arrays"``."""
     items = list(x) if isinstance(x, (list, tuple)) else [x]
+    if any(isinstance(e, Chunk) for e in items):
+        raise ParameterError("x is a list of Chunk objects; pass the chunks of one trajectory "
+                             "as an iterator, iter([chunk0, chunk1, ...]), or several "
+                             "trajectories as a list of such iterators")
     if items and all(is_dask(e) for e in items):
         return "dask"
     if items and all(isinstance(e, (Iterator, ChunkSource)) for e in items):

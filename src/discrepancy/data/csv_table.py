@@ -28,6 +28,7 @@ class CSVTable:
         self.name = getattr(path, "name", str(path))
         self._fh = open(path, newline="", encoding="utf-8-sig")
         self._reader = csv.reader(self._fh)
+        self._lines = self._checked_lines()
         try:
             self.header = self._read_header()
         except BaseException:
@@ -40,8 +41,17 @@ class CSVTable:
     def __exit__(self, *exc) -> None:
         self._fh.close()
 
+    def _checked_lines(self):
+        """The rows of cells, with undecodable bytes and broken quoting reported as
+        DataError naming the line."""
+        try:
+            yield from self._reader
+        except (UnicodeDecodeError, csv.Error) as e:
+            raise DataError(f"{self.name} line {self._reader.line_num + 1}: not readable as "
+                            f"UTF-8 CSV text ({type(e).__name__}: {e})") from None
+
     def _read_header(self) -> list[str]:
-        for row in self._reader:
+        for row in self._lines:
             if any(cell.strip() for cell in row):
                 header = [cell.strip() for cell in row]
                 break
@@ -63,7 +73,7 @@ class CSVTable:
     def read(self, columns: Sequence[int], max_rows: int | None = None) -> np.ndarray:
         """The values of ``columns`` (indices into ``header``) of the next data rows,
         ``(rows, len(columns))``; at most ``max_rows`` rows (``None``: to the end)."""
-        filled = (cells for cells in self._reader if any(cell.strip() for cell in cells))
+        filled = (cells for cells in self._lines if any(cell.strip() for cell in cells))
         values = [self._values(cells, columns) for cells in itertools.islice(filled, max_rows)]
         return np.array(values, dtype=float).reshape(len(values), len(columns))
 

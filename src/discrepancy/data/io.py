@@ -10,10 +10,19 @@ from pathlib import Path
 
 import numpy as np
 
+from ..constraints import InstanceOf, Predicate, validate_params
 from ..errors import DataError, UnknownNameError
+from ..resources import CHUNKED, check_memory
+from .containers import check_file, open_arrays
 from .csv_table import CSVTable
 from .trajectory import as_2d, as_times
 
+#: a column or variable name, and what ``states=``/``inputs=`` may be
+NAME = InstanceOf(str, "a name")
+NAMES = [None, NAME, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
+    isinstance(n, str) for n in v), "a non-empty list of names")]
+#: memory of reading a CSV file whole, per character of it (Python lists of floats)
+CSV_BYTES_PER_CHARACTER = 8
 SUFFIXES = {".csv": "csv", ".txt": "csv", ".npz": "npz", ".mat": "mat", ".h5": "hdf5",
             ".hdf5": "hdf5", ".hdf": "hdf5"}
 
@@ -47,23 +56,28 @@ def load(path, *, states=None, inputs=None, time: str | None = "t") -> LoadedDat
         time: name of the time column/variable (``None``: no times in the file).
 
     Raises:
-        FileNotFoundError, UnknownNameError (unknown suffix or variable, listing what the
-        file has), DataError (non-numeric or non-finite values, bad times).
+        MissingFileError (a FileNotFoundError), UnknownNameError (unknown suffix or
+        variable, listing what the file has), DataError (a folder, a corrupt file,
+        non-numeric or non-finite values, bad times), ResourceError (an array too large
+        to read whole; only the arrays asked for are read).
     """
-    path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"data file {path} does not exist")
+    validate_params("io.load", {"states": states, "inputs": inputs, "time": time},
+                    {"states": NAMES, "inputs": NAMES, "time": [None, NAME]})
+    path = check_file(path)
     kind = SUFFIXES.get(path.suffix.lower())
     if kind is None:
         raise UnknownNameError(f"path {path.name!r}: unknown file type {path.suffix!r}; "
                                f"valid suffixes: {', '.join(sorted(SUFFIXES))}")
     if kind == "csv":
         return _from_csv(path, states, inputs, time)
-    variables = _read_variables(path, kind)
-    return _from_variables(path, variables, states, inputs, time, matlab=kind == "mat")
+    with open_arrays(path, kind) as arrays:
+        return _from_variables(path, arrays, states, inputs, time, matlab=kind == "mat")
 
 
 def _from_csv(path: Path, states, inputs, time) -> LoadedData:
+    check_memory(f"reading {path.name} whole ({path.stat().st_size} bytes of text)",
+                 CSV_BYTES_PER_CHARACTER * path.stat().st_size,
+                 f"Stream it with CSVFiles instead: {CHUNKED}")
     with CSVTable(path) as table:
         header = table.header
         inputs = [inputs] if isinstance(inputs, str) else list(inputs or [])
@@ -105,22 +119,6 @@ def read_mat(path, *, what: str = "file") -> dict[str, np.ndarray]:
     return {k: v for k, v in contents.items() if not k.startswith("__")}
 
 
-def _read_variables(path: Path, kind: str) -> dict[str, np.ndarray]:
-    if kind == "npz":
-        with np.load(path, allow_pickle=False) as f:
-            return {k: f[k] for k in f.files}
-    if kind == "mat":
-        return read_mat(path)
-    from .._optional import require
-
-    h5py = require("h5py", purpose="reading HDF5 files")
-    out = {}
-    with h5py.File(path, "r") as f:
-        f.visititems(lambda name, obj: out.__setitem__(name, obj[()])
-                     if isinstance(obj, h5py.Dataset) else None)
-    return out
-
-
 def _stored_as_rows(shape, n_times, matlab: bool) -> bool:
     """Whether a 2-D variable holds samples in columns: decided by the length of the time
     vector when there is one, else (MATLAB files only) by being wider than tall."""
@@ -129,16 +127,18 @@ def _stored_as_rows(shape, n_times, matlab: bool) -> bool:
     return matlab and shape[0] < shape[1]
 
 
-def _from_variables(path, variables, states, inputs, time, *, matlab: bool):
+def _from_variables(path, arrays, states, inputs, time, *, matlab: bool):
+    """The requested arrays of an open file (only those are read)."""
+    names = arrays.names
     n_times = None
-    if time is not None and time in variables:
-        n_times = np.asarray(variables[time]).size
+    if time is not None and time in names:
+        n_times = int(np.prod(arrays.shape(time)))
 
     def get(name):
-        if name not in variables:
+        if name not in names:
             raise UnknownNameError(f"{path.name}: variable {name!r} not found; the file has "
-                                   f"{sorted(variables)}")
-        return np.asarray(variables[name])
+                                   f"{names}")
+        return np.asarray(arrays.read(name))
 
     def columns(spec, default_stem):
         if isinstance(spec, str):
@@ -146,16 +146,17 @@ def _from_variables(path, variables, states, inputs, time, *, matlab: bool):
             a = a[:, None] if a.ndim == 1 else a
             if a.ndim == 2 and _stored_as_rows(a.shape, n_times, matlab):
                 a = a.T
-            return a, [f"{default_stem}{i + 1}" for i in range(a.shape[1])]
+            return a, [f"{default_stem}{i + 1}" for i in range(a.shape[1])] if a.ndim == 2 \
+                else []
         return np.column_stack([get(n).ravel() for n in spec]), list(spec)
 
     x, state_names = columns("x" if states is None else states, "x")
     x = as_2d(f"{path.name} states", x)
     u, input_names = None, []
-    if inputs is not None or "u" in variables:
+    if inputs is not None or "u" in names:
         u, input_names = columns("u" if inputs is None else inputs, "u")
         u = as_2d(f"{path.name} inputs", u, n_rows=len(x))
     t = None
-    if time is not None and time in variables:
+    if time is not None and time in names:
         t = as_times(f"{path.name} variable {time!r}", get(time).ravel(), len(x))
     return LoadedData(x, t, u, state_names, input_names)

@@ -20,9 +20,19 @@ from pathlib import Path
 import numpy as np
 
 from .._optional import require
-from ..errors import ShapeError, UnknownNameError
+from ..constraints import Integral, Interval, Predicate, validate_params
+from ..errors import (
+    DataError,
+    MissingFileError,
+    ParameterError,
+    ShapeError,
+    UnknownNameError,
+    describe,
+)
 from .chunks import Chunk, ChunkSource
+from .containers import as_path, open_arrays
 from .csv_table import CSVTable
+from .io import NAME, NAMES
 
 DEFAULT_CHUNK = 65536
 FIELDS = ("x", "t", "u", "x_dot")
@@ -36,13 +46,23 @@ def _paths(paths, pattern: str) -> list[Path]:
     if isinstance(paths, (str, Path)) and Path(paths).is_dir() and not _is_zarr_store(Path(paths)):
         found = sorted(Path(paths).glob(pattern))
         if not found:
-            raise FileNotFoundError(f"folder {paths} holds no files matching {pattern!r}")
+            raise MissingFileError(f"folder {str(paths)!r} holds no files matching {pattern!r}")
         return found
-    out = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+    if not isinstance(paths, (str, Path, list, tuple)) or not paths:
+        raise ParameterError(f"paths must be a file, a folder or a non-empty list of files; "
+                             f"got {describe(paths)}")
+    out = [as_path(p, "paths") for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
     for p in out:
         if not p.exists():
-            raise FileNotFoundError(f"data file {p} does not exist")
+            raise MissingFileError(f"data file {str(p)!r} does not exist")
     return out
+
+
+_CHUNK_SIZE = {"chunk_size": [Interval(Integral, 1, None)]}
+_LENGTHS = {"lengths": [None, Interval(Integral, 1, None), Predicate(
+    lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
+        Interval(Integral, 1, None).is_satisfied_by(e) for e in v),
+    "a non-empty list of integers >= 1")]}
 
 
 class _ArrayFiles(ChunkSource):
@@ -51,6 +71,10 @@ class _ArrayFiles(ChunkSource):
     def __init__(self, paths, *, x: str = "x", t: str | None = None, u: str | None = None,
                  x_dot: str | None = None, chunk_size: int = DEFAULT_CHUNK,
                  lengths: int | Sequence[int] | None = None):
+        validate_params(type(self).__name__, {"chunk_size": chunk_size, "lengths": lengths,
+                                              "x": x, "t": t, "u": u, "x_dot": x_dot},
+                        {**_CHUNK_SIZE, **_LENGTHS, "x": [NAME], "t": [None, NAME],
+                         "u": [None, NAME], "x_dot": [None, NAME]})
         self.paths = _paths(paths, self._pattern)
         self.names = {"x": x, "t": t, "u": u, "x_dot": x_dot}
         self.chunk_size = int(chunk_size)
@@ -68,7 +92,13 @@ class _ArrayFiles(ChunkSource):
             if name not in arrays:
                 raise UnknownNameError(f"{path.name}: no dataset {name!r} (for {field}); the file "
                                        f"has: {', '.join(arrays.available()) or 'nothing'}")
-            shape = arrays[name].shape
+            shape = getattr(arrays[name], "shape", None)
+            if shape is None:
+                raise UnknownNameError(f"{path.name}: {name!r} (for {field}) is a group, not a "
+                                       f"dataset; the file has: {', '.join(arrays.available())}")
+            if len(shape) == 0:
+                raise ShapeError(f"{path.name}: dataset {name!r} ({field}) holds one number; "
+                                 "expected an array with one row per sample")
             if m is None:
                 m = shape[0]
             if shape[0] != m or len(shape) != (1 if field == "t" else 2):
@@ -142,7 +172,10 @@ class HDF5Source(_ArrayFiles):
     def _open(self, path):
         h5py = require("h5py", purpose="HDF5Source")
 
-        f = h5py.File(path, "r")
+        try:
+            f = h5py.File(path, "r")
+        except OSError as e:
+            raise DataError(f"{path.name} is not a readable HDF5 file ({e})") from None
 
         def listing():
             names = []
@@ -159,13 +192,23 @@ class ZarrSource(_ArrayFiles):
     def _open(self, path):
         zarr = require("zarr", purpose="ZarrSource")
 
-        g = zarr.open_group(str(path), mode="r")
+        try:
+            g = zarr.open_group(str(path), mode="r")
+        except Exception as e:  # zarr raises several types for what is not a group
+            raise DataError(f"{path.name} is not a readable zarr group ({type(e).__name__}: "
+                            f"{e})") from None
         return _Opened(g, lambda: sorted(k for k, _ in g.arrays()))
 
 
 class _TableFiles(ChunkSource):
     def __init__(self, paths, *, x, t=None, u=None, x_dot=None, chunk_size=DEFAULT_CHUNK,
                  one_trajectory: bool = False):
+        names = self._names
+        validate_params(type(self).__name__, {"chunk_size": chunk_size,
+                                              "one_trajectory": one_trajectory,
+                                              "x": x, "t": t, "u": u, "x_dot": x_dot},
+                        {**_CHUNK_SIZE, "one_trajectory": [bool], "x": names[1:],
+                         "t": [None, NAME], "u": names, "x_dot": names})
         self.paths = _paths(paths, self._pattern)
         self.names = {"x": x, "t": t, "u": u, "x_dot": x_dot}
         self.chunk_size = int(chunk_size)
@@ -193,14 +236,15 @@ class NPZFiles(_TableFiles):
 
     _pattern = "*.npz"
     _what = "array"
+    _names = [None, NAME]
 
     def __init__(self, paths, *, x="x", **kwargs):
         super().__init__(paths, x=x, **kwargs)
 
     def _file_chunks(self, path):
-        with np.load(path, allow_pickle=False) as f:
-            self._missing(path, list(f.files))
-            data = {k: f[n] for k, n in self.names.items() if n is not None}
+        with open_arrays(path, "npz") as f:
+            self._missing(path, f.names)
+            data = {k: f.read(n) for k, n in self.names.items() if n is not None}
         m = data["x"].shape[0]
         for s in range(0, m, self.chunk_size):
             yield Chunk(**{k: v[s:s + self.chunk_size] for k, v in data.items()},
@@ -213,6 +257,7 @@ class CSVFiles(_TableFiles):
 
     _pattern = "*.csv"
     _what = "column"
+    _names = NAMES
 
     def _file_chunks(self, path):
         with CSVTable(path) as table:

@@ -115,6 +115,9 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
         xdi = None if xds[i] is None else as_2d(f"x_dot{tag}", xds[i], n_rows=m, n_cols=n,
                                                 allow_1d=True)
         out.append(Trajectory(ti, xi, ui, xdi, check_weight(f"sample_weight{tag}", ws[i], m)))
+    if sample_weight is not None and not any(np.any(tr.weight > 0) for tr in out):
+        raise DataError("sample_weight must have at least one positive weight; all are 0, "
+                        "which leaves nothing to fit")
     return out
 
 
@@ -126,6 +129,6 @@ def check_weight(name: str, weight, m: int, *, where: str | None = None,
     w = check_array(name, np.full(m, weight) if np.ndim(weight) == 0 else weight, ndim=1,
                     n_rows=m, where=where, row_offset=row_offset)
     if np.any(w < 0):
-        raise DataError(f"{name} must be >= 0; found {w[np.argmax(w < 0)]} at row "
-                        f"{row_offset + int(np.argmax(w < 0))}")
+        raise DataError(f"{where + ': ' if where else ''}{name} must be >= 0; found "
+                        f"{w[np.argmax(w < 0)]} at row {row_offset + int(np.argmax(w < 0))}")
     return w

@@ -11,14 +11,16 @@ import numpy as np
 
 from ..errors import DataError, ShapeError, describe
 
-__all__ = ["check_array", "check_times", "is_uniform"]
+__all__ = ["as_float_array", "check_array", "check_times", "check_vector", "is_uniform"]
 
 
 def _place(where: str | None) -> str:
     return f"{where}: " if where else ""
 
 
-def _as_float(name: str, a, where: str | None) -> np.ndarray:
+def as_float_array(name: str, a, where: str | None = None) -> np.ndarray:
+    """Float64 array of any shape from ``a``: ShapeError for non-numbers, DataError for
+    complex or date values (no check of finiteness or shape)."""
     if isinstance(a, (str, bytes)):
         raise ShapeError(f"{_place(where)}{name} must be a numeric array; got {describe(a)}")
     try:
@@ -58,7 +60,7 @@ def check_finite(name: str, a: np.ndarray, *, where: str | None = None,
         at = f" at row {index[0]}" + (f", column {index[1]}" if len(index) > 1 else "")
     raise DataError(f"{_place(where)}{name} must be finite; found {a[tuple(index)]}{at} "
                     f"({int(bad.sum())} non-finite values{' in this chunk' if where else ''}). "
-                    "Nothing was fitted; clean or drop those rows first")
+                    "Clean or drop those rows first")
 
 
 def check_array(name: str, a, *, n_rows: int | None = None, n_cols: int | None = None,
@@ -79,7 +81,7 @@ def check_array(name: str, a, *, n_rows: int | None = None, n_cols: int | None =
         ShapeError for non-numeric input or wrong shapes, DataError for complex, date or
         non-finite values.
     """
-    arr = _as_float(name, a, where)
+    arr = as_float_array(name, a, where)
     if ndim == 2 and arr.ndim == 1 and allow_1d:
         arr = arr[:, None]
     if arr.ndim != ndim:
@@ -101,6 +103,16 @@ def check_array(name: str, a, *, n_rows: int | None = None, n_cols: int | None =
     return arr
 
 
+def check_vector(name: str, a, size: int, *, where: str | None = None) -> np.ndarray:
+    """``size`` finite numbers ``(size,)`` from ``a`` (any shape holding that many, e.g. a
+    state ``(n,)`` or ``(1, n)``)."""
+    arr = as_float_array(name, a, where).reshape(-1)
+    if arr.shape != (size,):
+        raise ShapeError(f"{_place(where)}{name} must be {size} numbers; got {describe(a)}")
+    check_finite(name, arr, where=where)
+    return arr
+
+
 def check_times(name: str, t, m: int, *, where: str | None = None,
                 after: float | None = None, row_offset: int = 0) -> np.ndarray:
     """Times ``(m,)`` from a positive step (a number) or a strictly increasing 1-D array.
@@ -110,7 +122,7 @@ def check_times(name: str, t, m: int, *, where: str | None = None,
     if isinstance(t, (str, bytes, bool, np.bool_)) or (np.ndim(t) == 0 and
                                                        not _is_real_number(t)):
         if np.ndim(t) == 0 and np.asarray(t).dtype.kind in "mM":
-            _as_float(name, t, where)
+            as_float_array(name, t, where)
         raise DataError(f"{_place(where)}{name} must be a positive time step (a number) or an "
                         f"array of {m} times; got {describe(t)}")
     if np.ndim(t) == 0:
@@ -118,7 +130,11 @@ def check_times(name: str, t, m: int, *, where: str | None = None,
         if not np.isfinite(dt) or dt <= 0:
             raise DataError(f"{_place(where)}{name} as a time step must be a positive finite "
                             f"number; got {dt}")
-        return (np.arange(m) + row_offset) * dt
+        times = (np.arange(m) + row_offset) * dt
+        if m and not np.isfinite(times[-1]):
+            raise DataError(f"{_place(where)}{name} as a time step of {dt:g} puts the last of "
+                            f"{m} samples beyond float range; give a smaller step")
+        return times
     times = check_array(name, t, ndim=1, where=where, row_offset=row_offset)
     if times.shape[0] != m:
         raise ShapeError(f"{_place(where)}{name} must be a step or a 1-D array of {m} times (one "

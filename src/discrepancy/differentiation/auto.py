@@ -33,12 +33,13 @@ from ..constraints import Integral, Interval, Predicate
 from ..data.validation import is_uniform
 from ..errors import ShapeError
 from .base import Differentiator, register
-from .methods import ODD_WINDOW, SavitzkyGolay
+from .methods import MAX_POLYORDER, ODD_WINDOW, SavitzkyGolay
 from .savgol import savgol, savgol_coefficients
 from .spline import SmoothingSpline
 
 ODD_DEGREE = Predicate(lambda p: isinstance(p, (int, np.integer)) and not isinstance(p, bool)
-                       and p >= 3 and p % 2 == 1, "an odd integer >= 3")
+                       and 3 <= p <= MAX_POLYORDER and p % 2 == 1,
+                       f"an odd integer >= 3 and <= {MAX_POLYORDER}")
 #: the window used is this fraction of the GCV-best one (see the module docstring)
 REGRESSION_SCALE = 0.5
 #: consecutive windows of rising GCV after which the search stops

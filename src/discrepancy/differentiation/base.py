@@ -12,7 +12,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ..base import Estimator
-from ..data.validation import is_uniform
+from ..data.validation import check_array, check_times, is_uniform
 from ..errors import DataError, ShapeError
 from ..registry import Registry
 
@@ -44,10 +44,11 @@ class Differentiator(Estimator, ABC):
     def __call__(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Return ``(x_smooth, x_dot)``, each ``(m, n)``, for ``x`` ``(m, n)`` at ``t`` ``(m,)``."""
         self._validate_params()
-        x = np.asarray(x, dtype=float)
-        t = np.asarray(t, dtype=float)
-        if x.ndim != 2 or t.shape != (x.shape[0],):
-            raise ShapeError(f"x must be (m, n) with t of shape (m,); got x {x.shape}, t {t.shape}")
+        x = check_array("x", x)
+        if np.ndim(t) != 1:
+            raise ShapeError(f"x must be (m, n) with t of shape (m,); got x {x.shape}, t "
+                             f"{np.shape(t)}")
+        t = check_times("t", t, x.shape[0])
         if x.shape[0] < self.min_samples:
             raise ShapeError(f"x has {x.shape[0]} samples, fewer than the {self.min_samples} that "
                              f"{self!r} needs (its window); give a longer trajectory or a "

@@ -18,9 +18,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..constraints import InstanceOf, Integral, Interval
+from ..data.validation import as_float_array
 from ..errors import DataError, ParameterError, ShapeError
 from .base import Differentiator, register
-from .methods import ODD_WINDOW, SavitzkyGolay
+from .methods import MAX_POLYORDER, ODD_WINDOW, SavitzkyGolay
 
 
 @register("dequantised")
@@ -46,7 +47,7 @@ class Dequantised(Differentiator):
     uniform_only = True
     _parameter_constraints = {
         "method": [None, InstanceOf(Differentiator, "a Differentiator")],
-        "window_length": [ODD_WINDOW], "polyorder": [Interval(Integral, 1, None)],
+        "window_length": [ODD_WINDOW], "polyorder": [Interval(Integral, 1, MAX_POLYORDER)],
         "iterations": [Interval(Integral, 1, None)]}
 
     def __init__(self, method: Differentiator | None = None, *, resolution, encoders=None,
@@ -77,7 +78,7 @@ class Dequantised(Differentiator):
     def _matrix(self, n: int) -> np.ndarray:
         if self.encoders is None:
             return np.eye(n)
-        e = np.asarray(self.encoders, dtype=float)
+        e = as_float_array("encoders", self.encoders)
         if e.shape != (n, n):
             raise ShapeError(f"encoders must be an ({n}, {n}) matrix for x with {n} columns; "
                              f"got shape {e.shape}")

@@ -10,10 +10,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..constraints import Integral, Interval, Predicate, Real
-from ..errors import ParameterError
+from ..errors import ConvergenceError, ParameterError
 from .base import Differentiator, register
 from .savgol import savgol
 
+#: highest Savitzky-Golay degree: filters cost O(window x degree^2) to build (degree 999 of a
+#: 1001-sample window took over 20 s) and degrees beyond a few tens add nothing measurable
+MAX_POLYORDER = 30
 #: an odd window of at least 3 samples (Savitzky-Golay smoothers)
 ODD_WINDOW = Predicate(lambda w: isinstance(w, (int, np.integer)) and not isinstance(w, bool)
                        and w >= 3 and w % 2 == 1, "an odd integer >= 3")
@@ -52,7 +55,7 @@ class SavitzkyGolay(Differentiator):
         "window_length": [ODD_WINDOW, Predicate(
             lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
                 ODD_WINDOW.is_satisfied_by(w) for w in v), "a list of odd integers >= 3")],
-        "polyorder": [Interval(Integral, 1, None)], "smooth": [bool]}
+        "polyorder": [Interval(Integral, 1, MAX_POLYORDER)], "smooth": [bool]}
 
     def __init__(self, window_length: int = 21, polyorder: int = 3, *, smooth: bool = True):
         self.window_length = window_length
@@ -103,9 +106,13 @@ class _DerivativePackage(Differentiator):
         return {k: v for k, v in self.get_params(deep=False).items() if k != "smooth"}
 
     def _compute(self, x, t):
-        method = self._method()
-        x_dot = method.d(x, t, axis=0)
-        x_smooth = method.x(x, t, axis=0) if getattr(self, "smooth", False) else x
+        try:
+            method = self._method()
+            x_dot = method.d(x, t, axis=0)
+            x_smooth = method.x(x, t, axis=0) if getattr(self, "smooth", False) else x
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as e:
+            raise ConvergenceError(f"{self!r} failed on these data ({type(e).__name__}: {e}); "
+                                   "try other parameters or another method") from e
         return np.asarray(x_smooth, float), np.asarray(x_dot, float)
 
 
@@ -153,6 +160,11 @@ class TrendFiltered(_DerivativePackage):
         self.order = order
         self.alpha = alpha
         self.max_iter = max_iter
+
+    @property
+    def min_samples(self) -> int:
+        self._validate_params()
+        return int(self.order) + 2   # the penalty takes (order + 1)-th differences
 
 
 @register("kalman")

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..constraints import Integral, Interval
 from ..data.validation import is_uniform
-from ..errors import DataError, ShapeError
+from ..errors import DataError, ParameterError, ShapeError
 from .base import Differentiator, register
 from .methods import ODD_WINDOW
 
@@ -54,6 +54,13 @@ class WeakForm(Differentiator):
     @property
     def data_driven(self) -> bool:
         return self.window_length is None
+
+    @property
+    def sample_rows(self) -> int:
+        """Rows the automatic window is chosen from (those of ``"auto"``), also when streamed."""
+        from .auto import AutoSmoothing
+
+        return AutoSmoothing().sample_rows
 
     def choose(self, series) -> tuple[WeakForm, dict]:
         """A weak form with the window chosen from data ``series`` (list of ``(t, x)``)."""
@@ -107,8 +114,9 @@ class WeakForm(Differentiator):
         return integral, by_parts
 
     def _compute(self, x, t):
-        raise NotImplementedError("the weak form has no pointwise derivative; it is used by "
-                                  "models (differentiation_method='weak')")
+        raise ParameterError("WeakForm has no pointwise derivative to return; use it as a "
+                             "model's differentiation_method ('weak'), or another method to "
+                             "differentiate")
 
 
 #: shortest window (the rectangle rule needs a few dozen samples per test function)

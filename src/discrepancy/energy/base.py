@@ -7,7 +7,7 @@ from ..base import Estimator
 from ..constraints import InstanceOf, Predicate, is_callable
 from ..data.trajectory import as_2d, as_times
 from ..differentiation import Differentiator, SavitzkyGolay, get_differentiation_method
-from ..errors import ShapeError
+from ..errors import PriorError, ShapeError, describe
 from ..symbolic import IDENTIFIER
 from .metrics import error_summary
 
@@ -65,7 +65,18 @@ class EnergyModel(Estimator):
         return [*positions, *[f"d{name}" for name in positions]]
 
     def _energy(self, x) -> np.ndarray:
-        h = np.asarray(self.energy(x), dtype=float).reshape(-1)
+        try:
+            value = self.energy(x)
+        except Exception as e:
+            raise PriorError(f"energy(x) raised {type(e).__name__}: {e} (x of shape "
+                             f"{x.shape})") from e
+        if np.iscomplexobj(value):
+            raise PriorError("energy(x) must return real values; it returned complex ones")
+        try:
+            h = np.asarray(value, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise PriorError(f"energy(x) must return ({x.shape[0]},) numbers; got "
+                             f"{describe(value)}") from None
         if h.shape != (x.shape[0],):
             raise ShapeError(f"energy(x) must return ({x.shape[0]},); got {h.shape}")
         if not np.all(np.isfinite(h)):

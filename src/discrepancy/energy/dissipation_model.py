@@ -14,6 +14,10 @@ TERMS = [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 a
     isinstance(term, FrictionTerm) for term in v), "a non-empty list of FrictionTerm")]
 
 
+#: fewest blocks a block fit compares (the energy lost between consecutive blocks)
+MIN_BLOCKS = 3
+
+
 class DissipationDiscrepancy(EnergyModel):
     """``dH(t) = c + Σ_j ξ_j ∫_0^t θ_j dt`` with ``ξ >= 0``: friction laws from a swing.
 
@@ -62,7 +66,12 @@ class DissipationDiscrepancy(EnergyModel):
     def _block(self, t) -> int | None:
         if self.block_seconds is None:
             return None
-        return max(2, int(round(self.block_seconds / np.median(np.diff(t)))))
+        block = max(2, int(round(self.block_seconds / np.median(np.diff(t)))))
+        if len(t) // block < MIN_BLOCKS:
+            raise ParameterError(f"block_seconds = {self.block_seconds} s leaves "
+                                 f"{len(t) // block} blocks of a {t[-1] - t[0]:.4g} s record; "
+                                 f"the fit needs at least {MIN_BLOCKS} (use shorter blocks)")
+        return block
 
     def fit(self, q, t, *, dq=None) -> DissipationDiscrepancy:
         """Fit on one trajectory of positions ``q`` ``(m, k)`` at times ``t`` (s or a step)."""

@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..constraints import validate_params
 from ..errors import ParameterError
-from ..models.uncertainty import CoefficientUncertainty
+from ..models.uncertainty import BOOTSTRAP_CONSTRAINTS, CoefficientUncertainty
 from .dissipation import block_weights, nonnegative_fit
 
 
@@ -61,8 +62,8 @@ def bootstrap_dissipation(features: np.ndarray, delta_h: np.ndarray, coef: np.nd
     from tqdm.auto import tqdm
 
     m = len(delta_h)
-    if not isinstance(n_resamples, (int, np.integer)) or n_resamples < 2:
-        raise ParameterError(f"n_resamples must be an integer >= 2; got {n_resamples!r}")
+    validate_params("bootstrap", {"n_resamples": n_resamples, "seed": seed},
+                    {k: BOOTSTRAP_CONSTRAINTS[k] for k in ("n_resamples", "seed")})
     if not 2 <= samples_per_block <= m // 4:
         raise ParameterError(f"bootstrap blocks must hold 2 to {m // 4} samples (at least 4 "
                              f"blocks); got {samples_per_block}")

@@ -15,8 +15,10 @@ import sympy as sp
 
 from ..base import Estimator
 from ..constraints import InstanceOf, Predicate
-from ..errors import NotFittedError, ParameterError, ShapeError, UnknownNameError
-from ..symbolic import feature_name, symbol
+from ..data.validation import as_float_array
+from ..errors import NotFittedError, ParameterError, ShapeError, UnknownNameError, describe
+from ..resources import check_features
+from ..symbolic import IDENTIFIER, feature_name, symbol
 
 #: ``variables=``: ``None`` (all) or a list of names / indices into ``z = [x, u]``
 VARIABLES = [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
@@ -58,7 +60,7 @@ class FeatureLibrary(Estimator, ABC):
         """
         if not hasattr(self, "feature_expressions_"):
             raise NotFittedError(f"{type(self).__name__}.transform called before fit(names)")
-        Z = np.asarray(Z, dtype=float)
+        Z = as_float_array("Z", Z)
         if Z.ndim != 2 or Z.shape[1] != len(self.names_):
             raise ShapeError(f"Z must be (m, {len(self.names_)}) for variables {self.names_}; "
                              f"got shape {Z.shape}")
@@ -87,9 +89,20 @@ class FeatureLibrary(Estimator, ABC):
         if not expressions:
             raise ParameterError(f"{self!r} produces no features for variables {list(names)}; "
                                  "the library must have at least one column")
+        check_features(repr(self), len(expressions))
         self.names_ = list(names)
         self.feature_expressions_ = expressions
         self.n_features_ = len(expressions)
+
+
+def check_names(names) -> list[str]:
+    """The variable names a library is fitted to: a list of distinct identifiers."""
+    if isinstance(names, str) or not isinstance(names, (list, tuple)) or not all(
+            isinstance(n, str) and IDENTIFIER.match(n) for n in names) or \
+            len(set(names)) != len(names):
+        raise ShapeError(f"names must be a list of distinct identifiers (one per variable); "
+                         f"got {describe(names)}")
+    return list(names)
 
 
 def _check_operand(verb: str, other) -> None:
@@ -126,7 +139,11 @@ class BaseLibrary(FeatureLibrary):
 
     def fit(self, names: Sequence[str]) -> BaseLibrary:
         self._validate_params()
+        names = check_names(names)
         self._index = self._select(names)
+        count = self._n_features(len(self._index))
+        if count is not None:  # counted before any expression is built
+            check_features(f"{self!r} of {len(self._index)} variables", count)
         symbols = [symbol(names[i]) for i in self._index]
         self._bind(names, self._expressions(symbols))
         return self
@@ -140,6 +157,11 @@ class BaseLibrary(FeatureLibrary):
     def _evaluate_into(self, Zs: np.ndarray, out: np.ndarray) -> np.ndarray:
         out[...] = self._evaluate(Zs)
         return out
+
+    def _n_features(self, k: int) -> int | None:
+        """Hook: the number of columns on ``k`` variables, counted without building them
+        (``None``: no faster than building them)."""
+        return None
 
     @abstractmethod
     def _expressions(self, symbols: list[sp.Symbol]) -> list[sp.Expr]:
@@ -177,6 +199,7 @@ class ConcatLibrary(FeatureLibrary):
 
     def fit(self, names):
         self._validate_params()
+        names = check_names(names)
         self._fitted_parts = self._parts()
         exprs = [e for lib in self._fitted_parts for e in lib.fit(names).feature_expressions_]
         self._keep = _unique(exprs)
@@ -203,8 +226,10 @@ class TensorLibrary(FeatureLibrary):
 
     def fit(self, names):
         self._validate_params()
+        names = check_names(names)
         a = self.left.fit(names).feature_expressions_
         b = self.right.fit(names).feature_expressions_
+        check_features(repr(self), len(a) * len(b))
         exprs = [ea * eb for ea in a for eb in b]
         self._keep = _unique(exprs)
         self._bind(names, [exprs[i] for i in self._keep])

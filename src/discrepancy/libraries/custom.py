@@ -7,7 +7,7 @@ import numpy as np
 import sympy as sp
 
 from ..constraints import Predicate
-from ..errors import ParameterError
+from ..errors import FeatureError, ParameterError, describe
 from ..symbolic import FUNCTIONS, IDENTIFIER, adopt, compile_numpy
 from .base import VARIABLES, BaseLibrary
 
@@ -82,5 +82,26 @@ class CustomLibrary(BaseLibrary):
 
     def _evaluate(self, Zs):
         if self.expressions is not None:
-            return np.column_stack([f(Zs) for f in self._compiled])
-        return np.column_stack([np.asarray(f(Zs[:, j]), dtype=float) for f, j in self._funcs])
+            calls = [(lambda f=f: f(Zs)) for f in self._compiled]
+        else:
+            calls = [(lambda f=f, j=j: f(Zs[:, j])) for f, j in self._funcs]
+        m = Zs.shape[0]
+        return np.column_stack([self._column(call, name, m) for call, name in
+                                zip(calls, self.get_feature_names(), strict=True)])
+
+    @staticmethod
+    def _column(call, name: str, m: int) -> np.ndarray:
+        """One column ``(m,)`` from the user's function, or FeatureError naming the term."""
+        try:
+            value = call()
+        except Exception as e:
+            raise FeatureError(f"library term {name!r} raised {type(e).__name__}: {e} (on "
+                               f"{m} rows)") from e
+        if np.iscomplexobj(value):
+            raise FeatureError(f"library term {name!r} returned complex values; terms must be "
+                               "real")
+        try:
+            return np.broadcast_to(np.asarray(value, dtype=float), (m,))
+        except (TypeError, ValueError):
+            raise FeatureError(f"library term {name!r} must return {m} numbers (one per "
+                               f"row); got {describe(value)}") from None

@@ -46,6 +46,10 @@ class FourierLibrary(BaseLibrary):
             raise ParameterError("FourierLibrary needs include_sin or include_cos to be True")
         return freqs
 
+    def _n_features(self, k: int) -> int:
+        n = self.n_frequencies if self.frequencies is None else len(self.frequencies)
+        return n * k * (int(self.include_sin) + int(self.include_cos))
+
     def _expressions(self, symbols):
         self._plan = []
         exprs = []

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from itertools import combinations, combinations_with_replacement
+from math import comb
 
 import numpy as np
 import sympy as sp
@@ -38,13 +39,27 @@ class PolynomialLibrary(BaseLibrary):
         self.interaction_only = interaction_only
         self.include_interaction = include_interaction
 
+    def _top(self, k: int) -> int:
+        """The highest degree that has columns (products of distinct variables stop at k)."""
+        if self.interaction_only:
+            return min(self.degree, k if self.include_interaction else 1)
+        return self.degree
+
+    def _n_features(self, k: int) -> int:
+        start, top = (0 if self.include_bias else 1), self._top(k)
+        if self.interaction_only:
+            return sum(comb(k, d) for d in range(start, top + 1))
+        if not self.include_interaction:
+            return k * top + (start == 0)
+        return comb(k + top, top) - start  # monomials of degree <= top in k variables
+
     def _combos(self, k: int) -> list[tuple[int, ...]]:
-        pick = combinations if self.interaction_only else combinations_with_replacement
-        start = 0 if self.include_bias else 1
+        start, top = (0 if self.include_bias else 1), self._top(k)
         if not self.include_interaction:  # powers of one variable each, PySINDy's order
-            return [c for d in range(start, self.degree + 1) for c in pick(range(k), d)
-                    if len(set(c)) <= 1]
-        return [c for d in range(start, self.degree + 1) for c in pick(range(k), d)]
+            return [(i,) * d if d else () for d in range(start, top + 1)
+                    for i in (range(k) if d else [0])]
+        pick = combinations if self.interaction_only else combinations_with_replacement
+        return [c for d in range(start, top + 1) for c in pick(range(k), d)]
 
     def _expressions(self, symbols):
         self._monomials = self._combos(len(symbols))

@@ -6,15 +6,17 @@ import copy
 import numpy as np
 
 from ..base import Estimator
-from ..constraints import InstanceOf, Predicate, is_callable
+from ..constraints import InstanceOf, Integral, Interval, Predicate, is_callable, validate_params
 from ..data.chunks import data_kind
 from ..data.trajectory import Trajectory, as_2d, as_trajectories
+from ..data.validation import as_float_array, check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..symbolic import compile_numpy, feature_name
 from .arguments import keywords_only
+from .checks import checked_discrepancy, pairs
 from .output_methods import OutputErrorMethods
 from .setup import FitSetup, resolve_setup
 from .simulation import integrate
@@ -140,6 +142,8 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         :class:`~discrepancy.data.Trajectory`) is needed when the differentiation method
         is chosen from the data (the default)."""
         self._validate_params()
+        validate_params("make_setup", {"n_states": n_states, "n_inputs": n_inputs},
+                        {"n_states": [Interval(Integral, 1)], "n_inputs": [Interval(Integral, 0)]})
         return resolve_setup(self, n_states, n_inputs, sample)
 
     def fit_statistics(self, stats: GramStatistics, setup: FitSetup) -> DiscrepancyModel:
@@ -148,11 +152,17 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         if not isinstance(setup, FitSetup):
             raise ParameterError(f"setup must be a FitSetup (from make_setup); got "
                                  f"{type(setup).__name__}")
+        if not isinstance(stats, GramStatistics):
+            raise ParameterError(f"stats must be GramStatistics (from setup.statistics); got "
+                                 f"{describe(stats)}")
         if (stats.p, stats.n) != (setup.n_features, setup.n_states):
             raise ShapeError(f"stats are for {stats.p} features and {stats.n} states; the set-up "
                              f"has {setup.n_features} and {setup.n_states}")
         if stats.count == 0:
             raise DataError("stats hold no samples: nothing to fit")
+        if not np.any(stats.gram):
+            raise DataError("the statistics are all zero: every sample has weight 0 or every "
+                            "library column is 0 on these data; nothing to fit")
         optimizer = copy.deepcopy(setup.optimizer)
         optimizer.fit_statistics(stats)
         self._set_fit(setup, optimizer.coef_, optimizer, stats)
@@ -210,17 +220,17 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
     def discrepancy(self, x, u=None) -> np.ndarray:
         """The learned correction ``g(x, u)``, ``(m, n)`` (a list for a list of ``x``)."""
         if isinstance(x, (list, tuple)):
-            return [self.discrepancy(xi, ui) for xi, ui in _pairs(x, u)]
+            return [self.discrepancy(xi, ui) for xi, ui in pairs(x, u)]
         x, u = self._variables(x, u)
-        return self._g(x if u is None else np.hstack([x, u]))
+        return checked_discrepancy(self, x if u is None else np.hstack([x, u]))
 
     def predict(self, x, u=None) -> np.ndarray:
         """Hybrid model derivatives ``f_m(x, u) + g(x, u)``, ``(m, n)``; a list of ``x``
         (and of ``u``) gives a list, as in PySINDy."""
         if isinstance(x, (list, tuple)):
-            return [self.predict(xi, ui) for xi, ui in _pairs(x, u)]
+            return [self.predict(xi, ui) for xi, ui in pairs(x, u)]
         x, u = self._variables(x, u)
-        return self.prior_(x, u) + self._g(x if u is None else np.hstack([x, u]))
+        return self.prior_(x, u) + checked_discrepancy(self, x if u is None else np.hstack([x, u]))
 
     @property
     def complexity(self) -> int:
@@ -247,6 +257,11 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         """
         keywords_only("simulate", args, "u")
         self.check_is_fitted()
+        x0 = check_vector("x0", x0, self.n_states_)
+        validate_params("simulate", {"compiled": compiled}, {"compiled": [bool]})
+        if not self.discrete_time:
+            from .simulation import check_options
+            check_options(integrator_kws)  # before any work that depends on them
         if self.discrete_time:
             from .discrete import iterate
             return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_)
@@ -373,7 +388,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         """A copy of this fitted model with coefficients ``coef`` ``(n, p)`` (e.g. one
         bootstrap resample); shares the set-up."""
         self.check_is_fitted()
-        coef = np.asarray(coef, dtype=float)
+        coef = as_float_array("coef", coef)
         if coef.shape != self.coef_.shape or not np.all(np.isfinite(coef)):
             raise ShapeError(f"coef must be finite with shape {self.coef_.shape}; got "
                              f"{coef.shape}")
@@ -439,15 +454,6 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         destroys an existing file)."""
         from .model_file import write_json
         write_json(path, self.to_state())
-
-
-def _pairs(x: list, u):
-    """``(x_i, u_i)`` of a list of trajectories (``u`` a matching list or None)."""
-    if u is None:
-        return [(xi, None) for xi in x]
-    if not isinstance(u, (list, tuple)) or len(u) != len(x):
-        raise ShapeError(f"u must be a list of {len(x)} arrays like x; got {describe(u)}")
-    return list(zip(x, u, strict=True))
 
 
 def load_model(path, prior=None, *, functions=None) -> DiscrepancyModel:

@@ -11,6 +11,7 @@ import numpy as np
 from ..data.validation import check_array
 from ..differentiation.base import Differentiator
 from ..errors import ConvergenceError, ParameterError, ShapeError
+from ..resources import check_memory, n_bytes
 
 
 class NextSample(Differentiator):
@@ -55,6 +56,9 @@ def iterate(step, x0, steps, u, n_states: int, n_inputs: int) -> np.ndarray:
     if not isinstance(n_steps, (int, np.integer)) or isinstance(n_steps, bool) or n_steps < 1:
         raise ParameterError(f"t must be the number of steps (an integer >= 1) or an array of "
                              f"that length for a discrete-time model; got {steps!r:.60}")
+    check_memory(f"the simulation's output ({n_steps} steps x {n_states} states)",
+                 n_bytes((n_steps, n_states)), "Ask for fewer steps, or simulate in pieces "
+                 "(each starting from the last state of the one before)")
     x0 = check_array("x0", np.reshape(x0, (1, -1)), n_cols=n_states)
     if n_inputs and u is None:
         raise ShapeError(f"u is required: the model has {n_inputs} inputs")

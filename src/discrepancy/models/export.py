@@ -15,7 +15,7 @@ def _part(model, part, *, default_hybrid: bool = False):
     if part is None:
         symbolic = model.prior_.is_symbolic or model.prior is None
         part = "hybrid" if symbolic or default_hybrid else "discrepancy"
-    if part not in ("hybrid", "discrepancy"):
+    if not isinstance(part, str) or part not in ("hybrid", "discrepancy"):
         raise ParameterError(f"part must be 'hybrid' or 'discrepancy'; got {part!r}")
     if part == "hybrid" and model.prior is not None and not model.prior_.is_symbolic:
         raise ExportError("the prior is a Python callable, so the hybrid model has no exact "

@@ -21,6 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..data.trajectory import as_2d
+from ..data.validation import as_float_array
 from ..errors import DataError, ParameterError, ShapeError
 
 HOLDS = ("linear", "zoh", "bandlimited")
@@ -81,7 +82,12 @@ def input_law(u, t: np.ndarray, n_inputs: int, *, hold: str = "linear") -> Calla
         raise ShapeError(f"u is required: the model has {n_inputs} inputs")
     if callable(u):
         def law(tau):  # checked at every call: a law may change shape or go NaN later
-            value = np.asarray(u(tau), dtype=float)
+            try:
+                raw = u(tau)
+            except Exception as e:
+                raise ParameterError(f"u(t) raised {type(e).__name__} at t = {tau:.6g}: "
+                                     f"{e}") from e
+            value = as_float_array("u(t)", raw)
             if value.size != n_inputs or value.ndim > 2 or not np.all(np.isfinite(value)):
                 raise ShapeError(f"u(t) must return {n_inputs} finite value(s), shape "
                                  f"({n_inputs},) or (1, {n_inputs}); at t = {tau:.6g} it "

@@ -20,7 +20,9 @@ import numpy as np
 import sympy as sp
 
 from .._version import __version__
-from ..errors import DiscrepancyError, ModelFileError, ParameterError
+from ..data.containers import as_path
+from ..errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
+from ..resources import check_features
 from ..symbolic import IDENTIFIER, from_data, to_data
 
 _NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
@@ -73,7 +75,7 @@ def _spec_or_none(registry, obj):
 def write_json(path, doc: dict) -> None:
     """Write ``doc`` to ``path`` atomically: a failed or killed write leaves any existing
     file as it was. Raises ModelFileError naming the path on OS errors."""
-    path = Path(path)
+    path = as_path(path, "path")
     if path.is_dir():
         raise ModelFileError(f"path {str(path)!r} is a folder; give a file name such as "
                              f"{str(path / 'model.json')!r}")
@@ -106,9 +108,11 @@ def _fail(why: str) -> ModelFileError:
 
 def read_json(path) -> dict:
     """Parse a model file (size-limited) into a dict; :func:`decode` checks its fields."""
-    path = Path(path)
+    path = as_path(path, "model file")
+    if path.is_dir():
+        raise ModelFileError(f"model file {str(path)!r} is a folder, not a file")
     if not path.is_file():
-        raise FileNotFoundError(f"model file {str(path)!r} does not exist")
+        raise MissingFileError(f"model file {str(path)!r} does not exist")
     if path.stat().st_size > MAX_BYTES:
         raise _fail(f"{path.stat().st_size} bytes is more than the {MAX_BYTES} a model file "
                     "may have")
@@ -116,6 +120,8 @@ def read_json(path) -> dict:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise _fail("not UTF-8 text") from None
+    except OSError as e:
+        raise ModelFileError(f"cannot read model file {str(path)!r}: {e.strerror or e}") from None
     try:
         return json.loads(text)
     except json.JSONDecodeError as e:
@@ -139,6 +145,7 @@ def decode(doc, *, prior=None, functions=None) -> dict:
         raise _fail("user_functions must be a list of identifiers")
     if not isinstance(doc["features"], list) or not doc["features"]:
         raise _fail("features must be a non-empty list of expressions")
+    check_features("the model file's library", len(doc["features"]))
     allowed = set(states) | set(inputs)
     features = [_expression(f, f"features[{i}]", allowed, declared)
                 for i, f in enumerate(doc["features"])]

@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import sympy as sp
 
-from ..errors import ParameterError, PriorError
+from ..errors import ExportError, ParameterError, PriorError, describe
 from ..symbolic import adopt, compile_numpy
 
 
@@ -31,7 +31,7 @@ class Prior:
             self._call = _adapt(prior)
         elif isinstance(prior, (list, tuple, sp.MatrixBase)):
             self.expressions = self._check_expressions(list(prior))
-            compiled = [compile_numpy(e, self.names) for e in self.expressions]
+            compiled = [self._compiled(i, e) for i, e in enumerate(self.expressions)]
             self._call = lambda x, u: np.column_stack(
                 [f(x if u is None else np.hstack([x, u])) for f in compiled])
         else:
@@ -44,6 +44,12 @@ class Prior:
                                  f"got {len(exprs)}")
         return [adopt(e, self.names, label=f"prior[{i}]") for i, e in enumerate(exprs)]
 
+    def _compiled(self, i: int, expr: sp.Expr):
+        try:
+            return compile_numpy(expr, self.names)
+        except ExportError as e:
+            raise PriorError(f"prior[{i}] = {expr} cannot be evaluated: {e}") from None
+
     @property
     def is_symbolic(self) -> bool:
         return self.expressions is not None
@@ -53,10 +59,18 @@ class Prior:
         if self._call is None:
             return np.zeros_like(x)
         try:
-            out = np.asarray(self._call(x, u), dtype=float)
+            out = self._call(x, u)
         except Exception as e:
             raise PriorError(f"prior raised {type(e).__name__}: {e} when called with x of shape "
                              f"{x.shape} and u {None if u is None else u.shape}") from e
+        if np.iscomplexobj(out):
+            raise PriorError("prior must return real values; it returned complex ones (the "
+                             "imaginary part would be dropped)")
+        try:
+            out = np.asarray(out, dtype=float)
+        except (TypeError, ValueError) as e:
+            raise PriorError(f"prior must return a numeric array of shape {x.shape}; it "
+                             f"returned {describe(out)} ({e})") from None
         if out.shape != x.shape:
             raise PriorError(f"prior must return an array of shape {x.shape} (same as x); "
                              f"got shape {out.shape}")

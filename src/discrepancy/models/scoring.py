@@ -3,39 +3,60 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..data.trajectory import as_trajectories
-from ..errors import ParameterError, ShapeError
+from ..accumulate import not_finite
+from ..errors import DataError, ParameterError, ShapeError, describe
+from ..resources import check_memory, n_bytes
+from .checks import model_data
 
 METRICS = ("r2", "rmse", "trajectory")
 
 
 def score(model, x, t=None, u=None, x_dot=None, *, metric="r2") -> float:
     """See :meth:`DiscrepancyModel.score`."""
-    if not callable(metric) and metric not in METRICS:
+    if not callable(metric) and not (isinstance(metric, str) and metric in METRICS):
         raise ParameterError(f"metric must be one of {', '.join(METRICS)} or a callable "
                              f"metric(truth, prediction) -> float; got {metric!r}")
-    trajectories = as_trajectories(x, t, u, x_dot)
+    trajectories = model_data(model, x, t, u, x_dot)
     if metric == "trajectory":
         if len(trajectories) != 1:
             raise ShapeError("metric='trajectory' scores one trajectory; got "
                              f"{len(trajectories)}")
         tr = trajectories[0]
+        size = np.linalg.norm(tr.x)
+        if size == 0:
+            raise DataError("metric='trajectory' divides by the norm of x, which is 0 here; "
+                            "use metric='rmse'")
         sim = model.simulate(tr.x[0], tr.t, u=tr.u)
-        return float(np.linalg.norm(sim - tr.x) / np.linalg.norm(tr.x))
+        return float(np.linalg.norm(sim - tr.x) / size)
     truth, pred = [], []
     setup = model.setup_
+    p = setup.n_features
     for tr in trajectories:  # derivatives (or, in the weak form, their integrals)
         z, y, signal = setup.rows(tr)
+        check_memory(f"Θ of {len(z)} samples and {p} columns", n_bytes((len(z), p)),
+                     "Score the data in pieces (a list of shorter trajectories)")
+        theta = setup.transform(z)
+        if not np.all(np.isfinite(theta)):
+            raise not_finite(theta.T, z, 0, p, setup.names)
         truth.append(signal)
-        pred.append(signal - y + setup.transform(z) @ model.coef_.T)
+        pred.append(signal - y + theta @ model.coef_.T)
     truth, pred = np.vstack(truth), np.vstack(pred)
     if truth.size == 0:
         raise ShapeError("score needs at least one sample")
     if callable(metric):  # e.g. sklearn.metrics.mean_absolute_error, as PySINDy allows
-        value = np.asarray(metric(truth, pred), dtype=float)
-        if value.ndim != 0 or not np.isfinite(value):
-            raise ParameterError(f"metric must return one finite number; got {value!r}")
-        return float(value)
+        try:
+            value = metric(truth, pred)
+        except Exception as e:
+            raise ParameterError(f"metric raised {type(e).__name__}: {e}") from e
+        try:
+            number = np.nan if isinstance(value, (str, bytes, bool)) or np.ndim(value) \
+                else float(value)
+        except (TypeError, ValueError):
+            number = np.nan
+        if not np.isfinite(number):
+            raise ParameterError(f"metric must return one finite number; got "
+                                 f"{describe(value)}")
+        return number
     if metric == "rmse":
         return float(np.sqrt(np.mean((truth - pred) ** 2)))
     ss_res = np.sum((truth - pred) ** 2, axis=0)

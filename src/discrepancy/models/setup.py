@@ -9,6 +9,7 @@ statistics with the same set-up and hand them to :meth:`DiscrepancyModel.fit_sta
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -91,7 +92,12 @@ class FitSetup:
         return z, y, xd
 
     def _weak_rows(self, trajectory: Trajectory):
+        from ..resources import CHUNKED, check_memory, n_bytes
+
         x, u = trajectory.x, trajectory.u
+        check_memory(f"the weak form's integrals of {len(x)} samples and {self.n_features} "
+                     "columns", 3 * n_bytes((len(x), self.n_features + self.n_states)),
+                     f"Pass the trajectory in pieces: {CHUNKED}")
         theta = self.library.transform(x if u is None else np.hstack([x, u]))
         values = np.hstack([theta, self.prior(x, u)])
         integral, by_parts = self.differentiation.rows(x, trajectory.t, values)
@@ -126,8 +132,23 @@ class FitSetup:
 
     def new_statistics(self) -> GramStatistics:
         """Empty statistics of the right size (``p`` features, ``n`` targets), kept per
-        cross-validation fold as well (:data:`N_FOLDS` folds of ``fold_segment`` rows)."""
-        return GramStatistics(self.n_features, self.n_states, N_FOLDS, self.fold_segment)
+        cross-validation fold as well (:data:`N_FOLDS` folds of ``fold_segment`` rows).
+        Raises ResourceError when a fit's statistics would not fit in memory."""
+        from ..accumulate import statistics_bytes
+        from ..resources import SMALLER_LIBRARY, check_memory
+
+        p, n = self.n_features, self.n_states
+        check_memory(f"the Gram statistics of {p} library columns", statistics_bytes(p, n),
+                     SMALLER_LIBRARY + "; they are p x p, so chunked fitting does not help")
+        return GramStatistics(p, n, N_FOLDS, self.fold_segment)
+
+    @cached_property
+    def names(self):
+        """Names of Θ's columns and of the variables, for messages about the data."""
+        from ..accumulate import Names
+
+        variables = [] if isinstance(self.differentiation, WeakForm) else self.variable_names
+        return Names(self.library.get_feature_names(), variables)
 
     def statistics(self, trajectory: Trajectory, *,
                    into: GramStatistics | None = None) -> GramStatistics:
@@ -141,7 +162,7 @@ class FitSetup:
         stats = self.new_statistics() if into is None else into
         z, y, x_dot = self.rows(trajectory)
         weight = None if trajectory.weight is None else trajectory.weight[:len(z)]
-        return accumulate(stats, self.transform, z, y, x_dot, weight)
+        return accumulate(stats, self.transform, z, y, x_dot, weight, names=self.names)
 
 
 def _copy_into(theta: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarray:
@@ -182,8 +203,10 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
         method, choice = NextSample(), None
     else:
         method = copy.deepcopy(get_differentiation_method(model.differentiation_method))
+        method._validate_params()
         method, choice = _resolved(method, sample, states)
     optimizer = copy.deepcopy(get_optimizer(model.optimizer))
+    optimizer._validate_params()
     if model.constraints is not None:
         if "constraints" not in optimizer.get_params(deep=False):
             raise ParameterError(f"constraints need an optimizer that takes them (STLSQ); "

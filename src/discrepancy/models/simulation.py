@@ -22,6 +22,8 @@ from .inputs import input_law, stage_inputs
 
 ADAPTIVE = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 METHODS = (*ADAPTIVE, "rk4")
+#: options passed on to scipy's adaptive solvers
+SOLVER_OPTIONS = ("first_step", "max_step", "min_step", "jac", "jac_sparsity", "lband", "uband")
 #: right-hand-side evaluations allowed per output sample (and at least MIN_EVALUATIONS)
 EVALUATIONS_PER_SAMPLE = 500
 MIN_EVALUATIONS = 100_000
@@ -33,20 +35,41 @@ class _Stop(Exception):
         self.why, self.time, self.state = why, float(time), np.asarray(state, float).copy()
 
 
-def _check_options(method, rtol, atol, substeps, max_evaluations):
-    if method not in METHODS:
+def _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws):
+    adaptive = isinstance(method, str) and method in ADAPTIVE
+    unknown = sorted(set(solver_kws) - set(SOLVER_OPTIONS if adaptive else ()))
+    if unknown:
+        raise ParameterError(f"simulate got unknown option(s) {unknown} for method "
+                             f"{method!r}; valid: method, rtol, atol, u_hold, substeps, "
+                             f"max_evaluations, compiled, {', '.join(SOLVER_OPTIONS)} (the last "
+                             "ones for adaptive methods)")
+    if not isinstance(method, str) or method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     for name, value in (("rtol", rtol), ("atol", atol)):
         if not isinstance(value, (int, float)) or isinstance(value, bool) or \
-                not np.isfinite(value) or value <= 0:
+                not 0 < value < np.inf:
             raise ParameterError(f"{name} must be a positive number; got {value!r}")
     if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or \
             not 1 <= substeps <= 10_000:
         raise ParameterError(f"substeps must be an integer in [1, 10000]; got {substeps!r}")
     if max_evaluations is not None and (not isinstance(max_evaluations, (int, np.integer))
+                                        or isinstance(max_evaluations, bool)
                                         or max_evaluations < 1):
         raise ParameterError(f"max_evaluations must be a positive integer or None; got "
                              f"{max_evaluations!r}")
+
+
+def check_options(options: dict) -> None:
+    """Check :func:`integrate`'s keyword ``options`` (defaults for those not given) before
+    work that depends on them, such as building a compiled stepper of ``substeps``."""
+    import inspect
+
+    defaults = {k: p.default for k, p in inspect.signature(integrate).parameters.items()
+                if p.default is not p.empty}
+    given = {**defaults, **options}
+    _check_options(given["method"], given["rtol"], given["atol"], given["substeps"],
+                   given["max_evaluations"], {k: v for k, v in options.items()
+                                              if k not in defaults})
 
 
 def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
@@ -73,7 +96,7 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
         discontinuous dynamics); it says when and where, and ``.partial`` holds the states
         at the output times reached.
     """
-    _check_options(method, rtol, atol, substeps, max_evaluations)
+    _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws)
     x0 = np.asarray(x0, dtype=float).ravel()
     if x0.shape != (n_states,) or not np.all(np.isfinite(x0)):
         raise ShapeError(f"x0 must be {n_states} finite numbers (one per state); "

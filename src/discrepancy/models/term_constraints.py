@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError, UnknownNameError
+from ..errors import ParameterError, UnknownNameError, describe
 from ..optimizers.linear_constraints import LinearConstraints
 
 Linear = tuple[Mapping[tuple[str, str], float], float]
@@ -40,6 +40,27 @@ class Constraints:
     equal: Sequence[Linear] = ()
     at_most: Sequence[Linear] = ()
     at_least: Sequence[Linear] = ()
+
+    def __post_init__(self):
+        lists = [("exact_equations", self.exact_equations)]
+        if self.only is not None:
+            if not isinstance(self.only, Mapping) or not all(isinstance(k, str)
+                                                              for k in self.only):
+                raise ParameterError(f"Constraints.only must be None or a mapping of term names "
+                                     f"to lists of states; got {describe(self.only)}")
+            lists += [(f"only[{k!r}]", v) for k, v in self.only.items()]
+        for name, value in lists:
+            if isinstance(value, str):
+                raise ParameterError(f"Constraints.{name} must be a list of state names; got "
+                                     f"the string {value!r} (write [{value!r}])")
+            if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+                raise ParameterError(f"Constraints.{name} must be a list of state names; got "
+                                     f"{describe(value)}")
+        for name in ("equal", "at_most", "at_least"):
+            if not isinstance(getattr(self, name), (list, tuple)):
+                raise ParameterError(f"Constraints.{name} must be a list of ({{(state, term): "
+                                     f"coefficient}}, bound) pairs; got "
+                                     f"{describe(getattr(self, name))}")
 
     def compile(self, state_names: Sequence[str], terms: Sequence[str]) -> LinearConstraints:
         """Index form for equations ``state_names`` and library ``terms``."""

@@ -23,9 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..data.trajectory import as_trajectories
+from ..constraints import InstanceOf, Integral, Interval, Options, validate_params
 from ..errors import ParameterError
 from ..optimizers import GramStatistics
+from ..resources import check_memory, n_bytes
+from .checks import model_data
+
+BOOTSTRAP_CONSTRAINTS = {
+    "n_resamples": [Interval(Integral, 2)], "method": [Options(("wild", "pairs"))],
+    "seed": [None, Interval(Integral, 0), InstanceOf(np.random.Generator, "a numpy Generator")]}
 
 
 @dataclass(frozen=True)
@@ -89,14 +95,18 @@ def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int 
     same cross-validation, in every resample.
     """
     setup = model.setup_
-    trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
-    total = sum(tr.n_samples for tr in trajectories)
     segment = setup.fold_segment
-    length = block_length or _default_block(total, segment, setup.differentiation.halo or 0)
-    if not isinstance(length, (int, np.integer)) or isinstance(length, bool) or length < 2 \
-            or segment % length:
+    if block_length is not None and (not Interval(Integral, 2).is_satisfied_by(block_length)
+                                     or segment % block_length):
         raise ParameterError(f"block_length must be an integer >= 2 that divides the fit's "
                              f"cross-validation segment ({segment} rows); got {block_length!r}")
+    trajectories = model_data(model, x, t, u, x_dot, sample_weight)
+    total = sum(tr.n_samples for tr in trajectories)
+    length = block_length or _default_block(total, segment, setup.differentiation.halo or 0)
+    p = setup.n_features
+    check_memory(f"the bootstrap's statistics of about {total // length} blocks of {p} "
+                 "columns", 3 * n_bytes((total // length + len(trajectories), p, p)),
+                 "Use a longer block_length or a smaller library")
     n_folds = setup.new_statistics().n_folds
     blocks, folds, row = [], [], 0
     for tr in trajectories:
@@ -159,11 +169,10 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
     from tqdm.auto import tqdm
 
     model.check_is_fitted()
-    if not isinstance(n_resamples, (int, np.integer)) or isinstance(n_resamples, bool) or \
-            n_resamples < 2:
-        raise ParameterError(f"n_resamples must be an integer >= 2; got {n_resamples!r}")
-    if method not in ("wild", "pairs"):
-        raise ParameterError(f"method must be 'wild' or 'pairs'; got {method!r}")
+    validate_params("bootstrap", {"n_resamples": n_resamples, "method": method, "seed": seed},
+                    BOOTSTRAP_CONSTRAINTS)
+    check_memory(f"{n_resamples} resampled coefficient matrices {model.coef_.shape}",
+                 n_bytes((n_resamples, *model.coef_.shape)), "Ask for fewer n_resamples")
     blocks, folds, length = block_statistics(model, x, t, u, x_dot, block_length=block_length,
                                              sample_weight=sample_weight)
     gram = np.stack([b.gram for b in blocks])
@@ -194,7 +203,8 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
 def _check_uncertainty(model, uncertainty) -> None:
     if not isinstance(uncertainty, CoefficientUncertainty) or \
             uncertainty.samples.shape[1:] != model.coef_.shape or \
-            list(uncertainty.feature_names) != model.get_feature_names():
+            list(uncertainty.feature_names) != model.get_feature_names() or \
+            not np.array_equal(uncertainty.estimate, model.coef_):
         raise ParameterError("uncertainty must be this model's bootstrap(...) result "
                              f"(coefficients {model.coef_.shape}); got "
                              f"{type(uncertainty).__name__}")
@@ -214,6 +224,10 @@ def predict_interval(model, x, u, uncertainty, level):
     """See :meth:`DiscrepancyModel.predict_interval`."""
     _check_uncertainty(model, uncertainty)
     x, u = model._variables(x, u)
+    check_memory(f"the {len(uncertainty.samples)} resampled predictions of {len(x)} samples",
+                 n_bytes((len(uncertainty.samples), *x.shape)) + n_bytes((len(x),
+                                                                        model.coef_.shape[1])),
+                 "Predict fewer samples at a time")
     theta = model.feature_library_.transform(x if u is None else np.hstack([x, u]))
     prior = model.prior_(x, u)
     curves = prior[None] + np.einsum("mp,rnp->rmn", theta, uncertainty.samples)
@@ -229,6 +243,7 @@ def simulate_interval(model, x0, t, u, uncertainty, level, n_draws, seed, **inte
     from ..errors import ConvergenceError
 
     _check_uncertainty(model, uncertainty)
+    validate_params("simulate_interval", {"seed": seed}, {"seed": BOOTSTRAP_CONSTRAINTS["seed"]})
     samples = uncertainty.samples
     if n_draws is not None:
         if not isinstance(n_draws, (int, np.integer)) or n_draws < 2:

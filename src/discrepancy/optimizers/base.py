@@ -8,7 +8,8 @@ import numpy as np
 import scipy.linalg
 
 from ..base import Estimator
-from ..errors import ConvergenceError, DataError, ShapeError
+from ..constraints import Integral, Interval
+from ..errors import ConvergenceError, DataError, ParameterError, ShapeError, describe
 from ..registry import Registry
 from .gram import GramStatistics
 
@@ -65,7 +66,12 @@ class Optimizer(Estimator, ABC):
         theta = as_2d("theta", theta)
         y = as_2d("y", y, n_rows=theta.shape[0], allow_1d=True)
         segment = max(1, -(-theta.shape[0] // (2 * FIT_FOLDS)))
-        stats = GramStatistics(theta.shape[1], y.shape[1], FIT_FOLDS, segment).add(theta, y)
+        with np.errstate(over="ignore", invalid="ignore"):
+            stats = GramStatistics(theta.shape[1], y.shape[1], FIT_FOLDS, segment).add(theta, y)
+        for name, sums, a in (("theta", stats.gram, theta), ("y", stats.yy, y)):
+            if not np.all(np.isfinite(sums)):
+                raise DataError(f"{name}'s sums of squares overflow (largest |{name}| = "
+                                f"{np.max(np.abs(a)):.3g}); scale {name} down")
         return self.fit_statistics(stats)
 
     def fit_gram(self, gram, rhs, *, n_samples: int | None = None, yy=None) -> Optimizer:
@@ -81,6 +87,12 @@ class Optimizer(Estimator, ABC):
         rhs = as_2d("rhs", rhs, n_rows=gram.shape[0], allow_1d=True)
         if gram.shape[0] != gram.shape[1]:
             raise ShapeError(f"gram must be square (p, p); got {gram.shape}")
+        if not np.allclose(gram, gram.T, rtol=1e-10, atol=0) or np.any(np.diag(gram) < 0):
+            raise DataError("gram must be symmetric with a non-negative diagonal (Θᵀ Θ); got "
+                            "a matrix that is not")
+        if n_samples is not None and not Interval(Integral, 1).is_satisfied_by(n_samples):
+            raise ParameterError(f"n_samples must be None or an integer >= 1; got "
+                                 f"{n_samples!r}")
         stats = GramStatistics(gram.shape[0], rhs.shape[1])
         stats.gram, stats.rhs, stats.count = gram, rhs, int(n_samples or 0)
         if yy is not None:
@@ -93,6 +105,8 @@ class Optimizer(Estimator, ABC):
     def fit_statistics(self, stats: GramStatistics) -> Optimizer:
         """Fit from :class:`GramStatistics` (with their folds, when kept); returns self."""
         self._validate_params()
+        if not isinstance(stats, GramStatistics):
+            raise ParameterError(f"stats must be GramStatistics; got {describe(stats)}")
         for name in ("gram", "rhs", "yy"):
             value = getattr(stats, name)
             if value is not None and not np.all(np.isfinite(value)):

@@ -13,7 +13,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..constraints import Integral, Interval
 from ..errors import ShapeError
+from ..resources import ALWAYS_ALLOWED, check_memory
+
+#: what p, n, n_folds and segment may be
+SIZE = Interval(Integral, 0)
 
 
 @dataclass
@@ -46,6 +51,13 @@ class GramStatistics:
     folds: list | None = field(init=False, default=None)
 
     def __post_init__(self):
+        sizes = {"p": self.p, "n": self.n, "n_folds": self.n_folds, "segment": self.segment}
+        if not all(type(v) is int and v >= 0 for v in sizes.values()):  # fast path: valid
+            from ..constraints import validate_params
+            validate_params("GramStatistics", sizes, {k: [SIZE] for k in sizes})
+        size = 8 * (self.n_folds + 1) * self.p * (self.p + self.n)
+        if size > ALWAYS_ALLOWED:  # (the message is only formatted for large sizes)
+            check_memory(f"Gram statistics of {self.p} columns", size, "Use fewer columns")
         self.gram = np.zeros((self.p, self.p))
         self.rhs = np.zeros((self.p, self.n))
         self.yy = np.zeros(self.n)

@@ -78,5 +78,5 @@ class SR3(Optimizer):
         coef = sparse.T
         if self.unbias:
             from .stlsq import STLSQ
-            coef = STLSQ._refit(gram, rhs, np.abs(coef) > 1e-14)
+            coef = STLSQ._refit(gram, rhs, coef != 0)
         return coef

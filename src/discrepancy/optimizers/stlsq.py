@@ -102,7 +102,7 @@ class STLSQ(Optimizer):
             warnings.warn(f"STLSQ did not converge after {self.max_iter} iterations",
                           ConvergenceWarning, stacklevel=3)
         if self.unbias:
-            support = (np.abs(coef) > 1e-14) | keep
+            support = ind | keep   # the thresholded support (no absolute cut-off: units vary)
             coef = constrained_solve(gram, rhs, support, constraints) if constraints.has_linear \
                 else self._refit(gram, rhs, support)
         return coef

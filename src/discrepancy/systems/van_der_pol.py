@@ -6,6 +6,8 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from ..constraints import Interval, Real, validate_params
+from ..data.validation import check_array
 from ..errors import ParameterError
 from ..symbolic import symbol
 from .base import System
@@ -27,8 +29,12 @@ class VanDerPol(System):
     state_names = ("x1", "x2")
     input_names = ()
 
+    def __post_init__(self):
+        validate_params("VanDerPol", {"alpha": self.alpha, "alpha_model": self.alpha_model},
+                        {"alpha": [Interval(Real)], "alpha_model": [Interval(Real)]})
+
     def rhs(self, x, u=None):
-        return _vdp(np.atleast_2d(x), self.alpha, linear=True)
+        return _vdp(check_array("x", np.atleast_2d(x), n_cols=2), self.alpha, linear=True)
 
     def flawed_model(self, case: str = "parameter"):
         """The paper's prior: ``"parameter"`` (α = alpha_model) or ``"structure"`` (no −x1)."""

@@ -1,0 +1,165 @@
+"""The adversarial suite's machinery: one table row per bad or edge input.
+
+A row is ``Case(entry, name, call, expect)``: ``call`` is a function of nothing (in-process
+rows) or a line of code (isolated rows), ``expect`` is :func:`raises` (an exception class
+that must also be a :class:`~discrepancy.errors.DiscrepancyError`, and a regex its message
+must match, naming the argument) or :func:`returns` (a check of the correct answer).
+
+Rows that could hang or allocate run in one child process per table, under a memory cap
+(``RLIMIT_AS``) and a time limit per row (:func:`run_isolated`), so the suite stays fast
+and a failure is reported, not suffered. The tables live in ``test_adversarial_*.py``;
+``test_adversarial_count.py`` checks that together they hold as many distinct rows per
+entry point as its docstring says.
+"""
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+import textwrap
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pytest
+
+from discrepancy.errors import DiscrepancyError
+
+
+def circle(m: int):
+    """``(t, x, x_dot)`` of ``m`` samples of ``x1' = x2, x2' = -x1`` (step 0.01), exact."""
+    t = np.arange(m) * 0.01
+    x = np.c_[np.sin(t), np.cos(t)]
+    return t, x, np.c_[x[:, 1], -x[:, 0]]
+
+
+def fast(**kw):
+    """A model with a fast fit set-up (finite differences, threshold 0.05) and ``kw``."""
+    import discrepancy as dc
+
+    return dc.DiscrepancyModel(**{"differentiation_method": "finite_difference",
+                                  "optimizer": dc.STLSQ(threshold=0.05), **kw})
+
+
+#: memory cap (bytes of address space) and time limit (s) of an isolated row
+MEMORY_CAP = 3 * 2**30
+ROW_SECONDS = 20
+
+
+@dataclass(frozen=True)
+class Expect:
+    error: type | None
+    pattern: str | None
+    check: Any = None
+
+
+def raises(error: type, pattern: str) -> Expect:
+    """The call must raise ``error`` (a DiscrepancyError subclass) matching ``pattern``."""
+    assert issubclass(error, DiscrepancyError), error
+    return Expect(error, pattern)
+
+
+def returns(check) -> Expect:
+    """The call must return a value for which ``check(value)`` is true (the right answer)."""
+    return Expect(None, None, check)
+
+
+@dataclass(frozen=True)
+class Case:
+    entry: str
+    name: str
+    call: Any
+    expect: Expect
+
+    @property
+    def id(self) -> str:
+        return f"{self.entry}: {self.name}"
+
+
+def params(cases: list[Case]):
+    """``pytest.mark.parametrize`` arguments for a table (ids are the rows' names)."""
+    ids = [c.id for c in cases]
+    assert len(set(ids)) == len(ids), [i for i in ids if ids.count(i) > 1]
+    return pytest.mark.parametrize("case", cases, ids=ids)
+
+
+def check(case: Case) -> None:
+    """Run an in-process row and assert its expectation."""
+    if case.expect.error is None:
+        value = case.call()
+        assert case.expect.check(value), f"{case.id}: wrong answer {value!r:.300}"
+        return
+    with pytest.raises(Exception) as info:  # noqa: B017  (any exception, inspected below)
+        case.call()
+    assert_error(case, type(info.value), str(info.value))
+
+
+def assert_error(case: Case, kind: type | str, message: str) -> None:
+    names = [k.__name__ for k in kind.__mro__] if isinstance(kind, type) else kind.split(",")
+    expected = case.expect.error
+    assert expected is not None, f"{case.id}: raised {names[0]}: {message}"
+    assert "DiscrepancyError" in names and expected.__name__ in names, \
+        f"{case.id}: expected {expected.__name__}, got {names[0]}: {message}"
+    assert re.search(case.expect.pattern, message, re.S), \
+        f"{case.id}: message {message!r} does not match {case.expect.pattern!r}"
+
+
+_CHILD = '''
+import json, resource, signal, sys, time, traceback
+resource.setrlimit(resource.RLIMIT_AS, ({cap}, {cap}))
+class _Late(BaseException):
+    pass
+def _alarm(*_):
+    raise _Late()
+signal.signal(signal.SIGALRM, _alarm)
+{prelude}
+_rows = json.loads(sys.stdin.read())
+for _i, _code in enumerate(_rows):
+    _start = time.perf_counter()
+    signal.alarm({seconds})
+    try:
+        _value = eval(compile(_code, f"row {{_i}}", "eval"))
+        _out = {{"kind": None, "value": repr(_value)[:300]}}
+    except _Late:
+        _out = {{"kind": "Timeout", "message": "no answer in {seconds} s"}}
+    except BaseException as _e:
+        _out = {{"kind": ",".join(k.__name__ for k in type(_e).__mro__), "message": str(_e),
+                "where": traceback.format_exc()[-600:]}}
+    finally:
+        signal.alarm(0)
+    _out["seconds"] = time.perf_counter() - _start
+    print(json.dumps(_out), flush=True)
+'''
+
+
+def run_isolated(prelude: str, cases: list[Case], *, cwd) -> dict[str, dict]:
+    """Run the rows' code (expressions) in one child process, capped; results by case id.
+
+    A row's result is ``{"kind": "Class,Base,...", "message"}`` for an exception,
+    ``{"kind": None, "value"}`` for a value, or ``{"kind": "Timeout"}``; rows the child
+    never reached (it died) are missing."""
+    script = _CHILD.format(cap=MEMORY_CAP, seconds=ROW_SECONDS,
+                           prelude=textwrap.dedent(prelude))
+    proc = subprocess.run([sys.executable, "-c", script], input=json.dumps(
+        [c.call for c in cases]), capture_output=True, text=True, cwd=cwd,
+        timeout=60 + ROW_SECONDS * len(cases))
+    lines = [json.loads(line) for line in proc.stdout.splitlines() if line.startswith("{")]
+    results = {c.id: r for c, r in zip(cases, lines, strict=False)}
+    if len(lines) < len(cases):
+        results["__died__"] = {"stderr": proc.stderr[-2000:]}
+    return results
+
+
+def check_isolated(case: Case, results: dict) -> None:
+    """Assert an isolated row's result (from :func:`run_isolated`)."""
+    result = results.get(case.id)
+    assert result is not None, f"{case.id}: the child process died: {results.get('__died__')}"
+    assert result["kind"] != "Timeout", f"{case.id}: hangs ({result['message']})"
+    if case.expect.error is None:
+        assert result["kind"] is None, f"{case.id}: raised {result}"
+        assert case.expect.check(result["value"]), f"{case.id}: wrong answer {result['value']}"
+        return
+    assert result["kind"] is not None, f"{case.id}: returned {result['value']}"
+    assert_error(case, result["kind"], result["message"])
+    assert result["seconds"] < ROW_SECONDS / 2, f"{case.id}: took {result['seconds']:.1f} s"

@@ -1,0 +1,69 @@
+"""The adversarial suite tries 671 distinct bad or edge inputs over every public entry point.
+
+| entry point | rows |
+|---|---|
+| fit | 72 |
+| prior | 21 |
+| model | 47 |
+| library | 54 |
+| optimizer | 43 |
+| differentiation | 36 |
+| predict | 15 |
+| score | 17 |
+| export | 21 |
+| simulate | 43 |
+| bootstrap | 20 |
+| model file | 50 |
+| io.load | 40 |
+| stream | 36 |
+| dask | 11 |
+| cli | 45 |
+| energy | 27 |
+| control | 25 |
+| isolated | 48 |
+| total | 671 |
+
+560 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 111 must give the right answer, checked against an
+exact value (closed forms, numpy least squares, the in-memory fit). The 48 isolated rows
+(resource limits, would-be hangs, the real command line) run in one child process under a
+3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
+these numbers of distinct rows, so the figures cannot drift from the suite.
+"""
+from __future__ import annotations
+
+import collections
+import re
+from pathlib import Path
+
+import test_adversarial_cli
+import test_adversarial_components
+import test_adversarial_energy_control
+import test_adversarial_files
+import test_adversarial_fit
+import test_adversarial_isolated
+import test_adversarial_models
+
+TABLES = [test_adversarial_fit, test_adversarial_components, test_adversarial_models,
+          test_adversarial_files, test_adversarial_cli, test_adversarial_energy_control,
+          test_adversarial_isolated]
+
+
+def test_the_docstring_gives_the_number_of_distinct_rows_per_entry_point():
+    cases = [case for table in TABLES for case in table.CASES]
+    ids = [case.id for case in cases]
+    assert len(set(ids)) == len(ids) >= 400
+    declared = dict(re.findall(r"^\| ([a-z. ]+) \| (\d+) \|$", __doc__, re.M))
+    counts = collections.Counter(case.entry for case in cases)
+    assert {k: int(v) for k, v in declared.items() if k != "total"} == dict(counts)
+    assert int(declared["total"]) == len(cases)
+    errors = sum(case.expect.error is not None for case in cases)
+    assert f"{errors} rows must raise" in " ".join(__doc__.split())
+    assert f"{len(cases) - errors} must give the right answer" in " ".join(__doc__.split())
+    assert f"The {counts['isolated']} isolated rows" in " ".join(__doc__.split())
+
+
+def test_the_readme_gives_the_same_count():
+    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text().split())
+    total = sum(len(table.CASES) for table in TABLES)
+    assert f"tries {total} distinct bad or edge inputs" in readme

@@ -1,0 +1,113 @@
+"""Adversarial rows for the energy models and the control tools (see ``adversarial.py``)."""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+from scipy.integrate import solve_ivp
+
+import discrepancy as dc
+from adversarial import Case, check, params, raises, returns
+from discrepancy.control import as_casadi, plan_trajectory, replay, rk4_step, swing_up_errors, tvlqr
+from discrepancy.errors import (
+    ConvergenceError,
+    DataError,
+    NotFittedError,
+    ParameterError,
+    PriorError,
+    ResourceError,
+    ShapeError,
+)
+
+# a damped oscillator q'' = -q - 0.1 q': H = (q^2 + dq^2) / 2 loses 0.1 dq^2 per second
+T = np.arange(2000) * 0.01
+SOL = solve_ivp(lambda t, s: [s[1], -s[0] - 0.1 * s[1]], (0, T[-1]), [1.0, 0.0], t_eval=T,
+                rtol=1e-11, atol=1e-12).y.T
+Q, DQ = SOL[:, :1], SOL[:, 1:]
+
+
+def H(x):
+    return 0.5 * (x[:, 0] ** 2 + x[:, 1] ** 2)
+
+
+def dissipation(**kw):
+    return dc.DissipationDiscrepancy(**{"energy": H, **kw})
+
+
+def state_form(**kw):
+    return dc.EnergyDiscrepancy(**{"energy": H, "feature_library": dc.PolynomialLibrary(2),
+                                   "optimizer": dc.STLSQ(threshold=0.01), **kw})
+
+
+FITTED = dissipation().fit(Q, T, dq=DQ)
+_x, _u = ca.SX.sym("x", 2), ca.SX.sym("u", 1)
+DOUBLE = ca.Function("f", [_x, _u], [ca.vertcat(_x[1], _u)])   # a double integrator
+PLAN = plan_trajectory(DOUBLE, x0=[0, 0], xf=[1, 0], T=1.0, n_intervals=10)
+DECAY = lambda x, u: -x  # noqa: E731  (x' = -x, for replays)
+
+
+def plan(**kw):
+    return plan_trajectory(DOUBLE, **{"x0": [0, 0], "xf": [1, 0], "T": 1.0, "n_intervals": 10,
+                                      **kw})
+
+
+CASES = [
+    # --- energy
+    Case("energy", "energy not callable", lambda: dissipation(energy=3).fit(Q, T, dq=DQ), raises(ParameterError, r"energy must be a callable")),
+    Case("energy", "energy returning NaN", lambda: dissipation(energy=lambda x: x[:, 0] * np.nan).fit(Q, T, dq=DQ), raises(ShapeError, r"energy\(x\) returned a non-finite value at row 0")),
+    Case("energy", "energy returning complex", lambda: dissipation(energy=lambda x: H(x) + 0j).fit(Q, T, dq=DQ), raises(PriorError, r"energy\(x\) must return real values")),
+    Case("energy", "energy raising", lambda: dissipation(energy=lambda x: 1 / 0).fit(Q, T, dq=DQ), raises(PriorError, r"energy\(x\) raised ZeroDivisionError")),
+    Case("energy", "energy returning a word", lambda: dissipation(energy=lambda x: "J").fit(Q, T, dq=DQ), raises(PriorError, r"energy\(x\) must return")),
+    Case("energy", "energy of the wrong length", lambda: dissipation(energy=lambda x: H(x)[:5]).fit(Q, T, dq=DQ), raises(ShapeError, r"energy\(x\) must return \(2000,\)")),
+    Case("energy", "q with NaN", lambda: dissipation().fit(np.where(T[:, None] > 5, np.nan, Q), T, dq=DQ), raises(DataError, r"^q must be finite")),
+    Case("energy", "dq with other rows", lambda: dissipation().fit(Q, T, dq=DQ[:10]), raises(ShapeError, r"^dq must have 2000 rows")),
+    Case("energy", "t decreasing", lambda: dissipation().fit(Q, -T, dq=DQ), raises(DataError, r"^t must be strictly increasing")),
+    Case("energy", "position_names of the wrong count", lambda: dissipation(position_names=["a", "b"]).fit(Q, T, dq=DQ), raises(ShapeError, r"q has 1 columns; position_names has 2")),
+    Case("energy", "position_names not identifiers", lambda: dissipation(position_names=["a b"]).fit(Q, T, dq=DQ), raises(ParameterError, r"position_names must be")),
+    Case("energy", "max_terms 0", lambda: dissipation(max_terms=0).fit(Q, T, dq=DQ), raises(ParameterError, r"max_terms must be an integer >= 1")),
+    Case("energy", "holdout 0.95", lambda: dissipation(holdout=0.95).fit(Q, T, dq=DQ), raises(ParameterError, r"holdout must be")),
+    Case("energy", "block_seconds 0", lambda: dissipation(block_seconds=0).fit(Q, T, dq=DQ), raises(ParameterError, r"block_seconds must be")),
+    Case("energy", "friction terms of text", lambda: dissipation(friction_terms=["viscous"]).fit(Q, T, dq=DQ), raises(ParameterError, r"friction_terms must be")),
+    Case("energy", "friction library of no names", lambda: dc.energy.default_friction_library([]), raises(ParameterError, r"velocity_names must be a non-empty list")),
+    Case("energy", "friction joint of an unknown speed", lambda: dc.energy.default_friction_library(["dq1"], joints={"j": "dq9"}), raises(ParameterError, r"joints\['j'\] must be a velocity name")),
+    Case("energy", "negative Stribeck speed", lambda: dc.energy.default_friction_library(["dq1"], stribeck_speed=-1), raises(ParameterError, r"stribeck_speed must be > 0")),
+    Case("energy", "blocks longer than the record", lambda: dissipation(block_seconds=15).fit(Q, T, dq=DQ), raises(ParameterError, r"block_seconds = 15 s leaves 1 blocks of a 19.99 s record; the fit needs at least 3")),
+    Case("energy", "a step so large the times overflow", lambda: dissipation().fit(Q, 1e308, dq=DQ), raises(DataError, r"^t as a time step of 1e\+308")),
+    Case("energy", "bootstrap of 1 resample", lambda: FITTED.bootstrap(Q, T, dq=DQ, n_resamples=1), raises(ParameterError, r"n_resamples must be an integer >= 2")),
+    Case("energy", "bootstrap blocks of 0 s", lambda: FITTED.bootstrap(Q, T, dq=DQ, block_seconds=0), raises(ParameterError, r"block_seconds must be > 0 s")),
+    Case("energy", "bootstrap seed a word", lambda: FITTED.bootstrap(Q, T, dq=DQ, seed="a"), raises(ParameterError, r"seed must be")),
+    Case("energy", "interval of a number", lambda: FITTED.predict_interval(Q, T, 3, dq=DQ), raises(ParameterError, r"uncertainty must be this model's bootstrap")),
+    Case("energy", "predict before fit", lambda: dissipation().predict(Q, T, dq=DQ), raises(NotFittedError, r"fit\(q, t\)")),
+    Case("energy", "state form without a library", lambda: dc.EnergyDiscrepancy(energy=H, optimizer=dc.STLSQ()).fit(Q, T, dq=DQ), raises(ParameterError, r"feature_library must be a feature library")),
+    Case("energy", "viscous friction recovered", lambda: FITTED.identified_terms(), returns(lambda terms: len(terms) == 1 and terms[0]["name"] == "viscous joint 1" and abs(terms[0]["coefficient"] - 0.1) < 1e-4)),
+    # --- control
+    Case("control", "model a number", lambda: as_casadi(3), raises(ParameterError, r"model must be a casadi.Function")),
+    Case("control", "dynamics without inputs", lambda: as_casadi(ca.Function("f", [_x], [_x])), raises(ShapeError, r"dynamics must map \(x \(n,1\), u \(r,1\)\)")),
+    Case("control", "unknown cost", lambda: plan(cost="time"), raises(ParameterError, r"cost must be one of \('tracking', 'effort'\); got 'time'")),
+    Case("control", "negative horizon", lambda: plan(T=-1), raises(ParameterError, r"plan_trajectory: T must be a finite number > 0; got -1")),
+    Case("control", "horizon a word", lambda: plan(T="long"), raises(ParameterError, r"T must be")),
+    Case("control", "1 interval", lambda: plan(n_intervals=1), raises(ParameterError, r"plan_trajectory: n_intervals must be an integer >= 2; got 1")),
+    Case("control", "substeps 0", lambda: plan(substeps=0), raises(ParameterError, r"substeps must be")),
+    Case("control", "x0 of 3 states", lambda: plan(x0=[0, 0, 0]), raises(ShapeError, r"x0 must have 2 entries")),
+    Case("control", "xf with NaN", lambda: plan(xf=[np.nan, 0]), raises(ParameterError, r"xf must be finite")),
+    Case("control", "Q of the wrong size", lambda: plan(Q=[1, 2, 3]), raises(ShapeError, r"Q must have 2 entries")),
+    Case("control", "bounds upside down", lambda: plan(u_bounds=[[1, -1]]), raises(ShapeError, r"u_bounds must be \(1, 2\) rows of \(lower, upper\)")),
+    Case("control", "unreachable in time", lambda: plan(u_bounds=[[-0.01, 0.01]]), raises(ConvergenceError, r"IPOPT found no plan")),
+    Case("control", "plan of the double integrator", lambda: PLAN.x[-1], returns(lambda x: np.allclose(x, [1, 0], atol=1e-8))),
+    Case("control", "rk4 step of 0 substeps", lambda: rk4_step(DOUBLE, 0.1, 0), raises(ParameterError, r"substeps must be a positive integer")),
+    Case("control", "tvlqr R of the wrong shape", lambda: tvlqr(DOUBLE, PLAN, R=np.ones((3, 3))), raises(ShapeError, r"R must be a scalar, \(1,\) diagonal or \(1, 1\)")),
+    Case("control", "replay with NaN in t", lambda: replay(DECAY, [1.0], [0, np.nan, 2], np.zeros((2, 1))), raises(DataError, r"^t must be finite")),
+    Case("control", "replay with 10**10 samples", lambda: replay(DECAY, [1.0], [0, 1, 2], np.zeros((2, 1)), samples=10**10), raises(ResourceError, r"replay's dense output")),
+    Case("control", "replay with 0 samples", lambda: replay(DECAY, [1.0], [0, 1, 2], np.zeros((2, 1)), samples=0), raises(ParameterError, r"replay: samples must be an integer >= 1")),
+    Case("control", "replay with a negative tolerance", lambda: replay(DECAY, [1.0], [0, 1, 2], np.zeros((2, 1)), rtol=-1), raises(ParameterError, r"replay: rtol must be")),
+    Case("control", "replay with x0 NaN", lambda: replay(DECAY, [np.nan], [0, 1, 2], np.zeros((2, 1))), raises(DataError, r"^x0 must be finite")),
+    Case("control", "replay with a law of the wrong length", lambda: replay(DECAY, [1.0], [0, 1, 2], np.zeros((5, 1))), raises(ShapeError, r"law must have one input row per interval \(2\)")),
+    Case("control", "replay on a non-uniform grid", lambda: replay(DECAY, [1.0], [0, 1, 3], np.zeros((2, 1))), raises(ParameterError, r"t must be uniformly spaced")),
+    Case("control", "replay of a feedback law raising", lambda: replay(DECAY, [1.0], [0, 1, 2], lambda k, x: 1 / 0), raises(ParameterError, r"law raised ZeroDivisionError")),
+    Case("control", "replay of x' = -x is exact", lambda: replay(DECAY, [1.0], [0, 1, 2], np.zeros((2, 1))).x[:, 0], returns(lambda x: np.allclose(x, np.exp(-np.arange(3.0)), rtol=1e-9))),
+    Case("control", "swing-up errors of a missing index", lambda: swing_up_errors([0.0, 0.0], angles=[5], rates=[1]), raises(ShapeError, r"angles")),
+]
+
+
+@params(CASES)
+def test_case(case):
+    check(case)
