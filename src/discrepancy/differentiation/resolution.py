@@ -26,7 +26,9 @@ ROWS = 4096
 def band_edge(t: np.ndarray, x: np.ndarray, share: float = SHARE) -> float:
     """Frequency (1/time) below which ``share`` of the detrended power of ``x`` lies."""
     step = float(np.median(np.diff(t)))
-    trend = np.polyval(np.polyfit(t - t[0], x, 1), t - t[0])
+    # the trend on times scaled to [0, 1]: a step of 1e-300 s made the fit's SVD fail
+    s = (t - t[0]) / (t[-1] - t[0])
+    trend = np.polyval(np.polyfit(s, x, 1), s)
     power = np.abs(np.fft.rfft(x - trend)) ** 2
     cumulative = np.cumsum(power[1:])
     if cumulative.size == 0 or cumulative[-1] <= 0:
