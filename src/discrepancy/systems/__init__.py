@@ -12,6 +12,7 @@ _LAZY = {
     "DoublePendulumParameters": "double_pendulum",
     "DoublePendulumOnCart": "double_pendulum_on_cart",
     "CartPendulumParameters": "double_pendulum_on_cart",
+    "LagrangianSystem": "lagrangian",
     "PendulumOnCart": "pendulum_on_cart",
     "PendulumOnCartParameters": "pendulum_on_cart",
 }

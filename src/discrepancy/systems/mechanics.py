@@ -12,7 +12,7 @@ import sympy as sp
 def lagrange_equations(kinetic: sp.Expr, potential: sp.Expr, q: Sequence[sp.Symbol],
                        dq: Sequence[sp.Symbol], *, dissipation: sp.Expr = sp.S.Zero,
                        forces: Sequence[sp.Expr] | None = None,
-                       driven: Mapping[int, sp.Expr] | None = None):
+                       driven: Mapping[int, sp.Expr] | None = None, simplify: bool = True):
     """Euler–Lagrange equations ``M(q) q̈_free = b(q, q̇, ...)`` for the free coordinates.
 
     The Lagrangian is ``L = T - V``; a Rayleigh dissipation function ``D(q̇)`` adds
@@ -22,7 +22,8 @@ def lagrange_equations(kinetic: sp.Expr, potential: sp.Expr, q: Sequence[sp.Symb
     acceleration is substituted into the others.
 
     Returns ``(free, M, b)``: indices of the free coordinates, the mass matrix and
-    the right-hand side, both sympy matrices.
+    the right-hand side, both sympy matrices (simplified unless ``simplify=False``: for
+    numerical use of many coordinates, where simplifying costs more than it saves).
     """
     n = len(q)
     driven = dict(driven or {})
@@ -39,6 +40,8 @@ def lagrange_equations(kinetic: sp.Expr, potential: sp.Expr, q: Sequence[sp.Symb
     unknowns = [ddq[i] for i in free]
     mass = sp.Matrix([[sp.diff(eq, a) for a in unknowns] for eq in equations])
     rest = sp.Matrix([-eq.subs({a: 0 for a in unknowns}) for eq in equations])
+    if not simplify:
+        return free, mass.applyfunc(sp.expand), rest.applyfunc(sp.expand)
     return free, sp.simplify(mass), sp.simplify(rest)
 
 

@@ -1,0 +1,179 @@
+"""Any mechanical system from its Lagrangian: energy, equations of motion and friction joints.
+
+The user writes the kinetic and potential energy (and, for the true system, a Rayleigh
+dissipation function or generalised forces) as sympy expressions of named coordinates and
+their rates; the equations of motion are derived with
+:func:`~discrepancy.systems.mechanics.lagrange_equations` and solved numerically per sample
+(``M(q) q̈ = b(q, q̇, u)``), so any number of coordinates works without an explicit inverse.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ParameterError, ShapeError
+from ..symbolic import compile_numpy, symbol
+from .base import System
+from .mechanics import lagrange_equations
+
+
+def _names(value, argument: str) -> tuple[str, ...]:
+    if isinstance(value, (str, sp.Symbol)) or not isinstance(value, Sequence) or not value:
+        raise ParameterError(f"{argument} must be a non-empty list of names or sympy symbols; "
+                             f"got {value!r:.80}")
+    names = tuple(str(v.name if isinstance(v, sp.Symbol) else v) for v in value)
+    if len(set(names)) != len(names) or not all(n.isidentifier() for n in names):
+        raise ParameterError(f"{argument} must be distinct identifiers; got {list(names)}")
+    return names
+
+
+def _expression(value, argument: str, allowed: Sequence[str]) -> sp.Expr:
+    if isinstance(value, (int, float)) and np.isfinite(value):
+        value = sp.Float(value)
+    if not isinstance(value, sp.Expr):
+        raise ParameterError(f"{argument} must be a sympy expression; got "
+                             f"{type(value).__name__}")
+    unknown = {s.name for s in value.free_symbols} - set(allowed)
+    if unknown:
+        raise ParameterError(f"{argument} uses {sorted(unknown)}, which are neither "
+                             f"coordinates, rates nor inputs ({list(allowed)}); substitute "
+                             "numbers for the parameters first")
+    return value.xreplace({s: symbol(s.name) for s in value.free_symbols})
+
+
+class LagrangianSystem(System):
+    """A mechanical system given by ``L = T - V`` in sympy.
+
+    Args:
+        kinetic, potential: ``T`` and ``V`` (J), sympy expressions of the coordinates and
+            rates (numbers substituted for every parameter).
+        coordinates: names (or symbols) of the generalised coordinates ``q``, e.g.
+            ``["phi"]``.
+        rates: names of their time derivatives (default ``"d" + name``).
+        dissipation: Rayleigh dissipation function ``D(q̇)`` (W/2) of the *true* system:
+            ``∂D/∂q̇_i`` is the friction force of coordinate ``i``; the flawed model drops it.
+        forces: generalised forces ``Q_i`` (N or N m) in coordinates, rates and inputs, e.g.
+            a motor torque ``[u]``; kept by the flawed model.
+        input_names: names of the inputs used in ``forces``.
+        joints: ``{label: relative speed}`` for friction laws (default: each coordinate is
+            its own joint). A chain in absolute angles has ``{"joint 2": dphi2 - dphi1}``.
+
+    States are ``x = [q, q̇]``; ``energy`` is the conservative ``H_m = T + V``.
+    """
+
+    def __init__(self, kinetic, potential, coordinates, *, rates=None, dissipation=0,
+                 forces=None, input_names=(), joints=None):
+        q = _names(coordinates, "coordinates")
+        dq = _names(rates, "rates") if rates is not None else tuple(f"d{n}" for n in q)
+        if len(dq) != len(q):
+            raise ParameterError(f"rates must name one rate per coordinate ({len(q)}); got "
+                                 f"{len(dq)}")
+        inputs = _names(list(input_names), "input_names") if len(input_names) else ()
+        states = (*q, *dq)
+        if len(set(states + inputs)) != len(states) + len(inputs):
+            raise ParameterError(f"input_names {list(inputs)} repeat a coordinate or rate name")
+        self.state_names, self.input_names = states, inputs
+        self.kinetic = _expression(kinetic, "kinetic", states)
+        self.potential = _expression(potential, "potential", q)
+        self.dissipation = _expression(dissipation, "dissipation", states)
+        if forces is not None and (isinstance(forces, (str, sp.Basic))
+                                   or not isinstance(forces, Sequence) or len(forces) != len(q)):
+            raise ParameterError(f"forces must be a list of {len(q)} expressions (one per "
+                                 f"coordinate); got {forces!r:.80}")
+        self.forces = [_expression(f, f"forces[{i}]", states + inputs)
+                       for i, f in enumerate(forces or [0] * len(q))]
+        self._joints = joints
+        self._compiled = {}
+
+    @property
+    def position_names(self) -> tuple[str, ...]:
+        return self.state_names[:len(self.state_names) // 2]
+
+    def joints(self) -> dict:
+        """``{label: relative speed}`` for :func:`~discrepancy.energy.default_friction_library`."""
+        from ..energy.dissipation import _joints
+
+        k = len(self.position_names)
+        return _joints(self._joints, [symbol(n) for n in self.state_names[k:]])
+
+    def _functions(self, friction: bool):
+        if friction not in self._compiled:
+            k = len(self.position_names)
+            syms = [symbol(n) for n in self.state_names]
+            _, mass, rest = lagrange_equations(
+                self.kinetic, self.potential, syms[:k], syms[k:],
+                dissipation=self.dissipation if friction else sp.S.Zero, forces=self.forces,
+                simplify=False)
+            names = (*self.state_names, *self.input_names)
+            self._compiled[friction] = ([[compile_numpy(e, names) for e in row]
+                                         for row in mass.tolist()],
+                                        [compile_numpy(e, names) for e in rest])
+        return self._compiled[friction]
+
+    def _stack(self, x, u) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        x = x[None, :] if x.ndim == 1 else x
+        if x.ndim != 2 or x.shape[1] != len(self.state_names):
+            raise ShapeError(f"x must be (m, {len(self.state_names)}) = "
+                             f"{list(self.state_names)}; got shape {x.shape}")
+        if not self.input_names:
+            return x
+        if u is None:
+            raise ShapeError(f"u is required: (m, {len(self.input_names)}) = "
+                             f"{list(self.input_names)}")
+        u = np.broadcast_to(np.asarray(u, dtype=float).reshape(-1, len(self.input_names)),
+                            (len(x), len(self.input_names)))
+        return np.hstack([x, u])
+
+    def _accelerations(self, x, u, friction: bool) -> np.ndarray:
+        z = self._stack(x, u)
+        mass, rest = self._functions(friction)
+        m = len(z)
+        matrix = np.stack([np.stack([np.broadcast_to(f(z), (m,)) for f in row], axis=-1)
+                           for row in mass], axis=-2)
+        b = np.stack([np.broadcast_to(f(z), (m,)) for f in rest], axis=-1)
+        return np.linalg.solve(matrix, b[..., None])[..., 0]
+
+    def rhs(self, x, u=None) -> np.ndarray:
+        """True dynamics ``[q̇, q̈]`` ``(m, 2k)`` (with the dissipation function)."""
+        x2 = self._stack(x, u)[:, :len(self.state_names)]
+        return np.hstack([x2[:, len(self.position_names):], self._accelerations(x, u, True)])
+
+    def flawed_model(self):
+        """The conservative model (no dissipation function), ``f_m(x, u)``."""
+        def prior(x, u=None):
+            x2 = self._stack(x, u)[:, :len(self.state_names)]
+            return np.hstack([x2[:, len(self.position_names):],
+                              self._accelerations(x, u, False)])
+        return prior
+
+    def energy(self, x) -> np.ndarray:
+        """``H_m = T + V`` (J), ``(m,)``."""
+        if "energy" not in self._compiled:
+            self._compiled["energy"] = compile_numpy(self.kinetic + self.potential,
+                                                     self.state_names)
+        x = self._stack(x, np.zeros(len(self.input_names)) if self.input_names else None)
+        return np.broadcast_to(self._compiled["energy"](x[:, :len(self.state_names)]),
+                               (len(x),)).copy()
+
+    def conservative_torques(self, x) -> np.ndarray:
+        """``-∂V/∂q`` (N m or N) per coordinate, ``(m, k)``: the gravity and spring torques."""
+        if "torques" not in self._compiled:
+            q = [symbol(n) for n in self.position_names]
+            self._compiled["torques"] = [compile_numpy(-sp.diff(self.potential, s),
+                                                       self.state_names) for s in q]
+        x = self._stack(x, np.zeros(len(self.input_names)) if self.input_names else None)
+        x = x[:, :len(self.state_names)]
+        return np.column_stack([np.broadcast_to(f(x), (len(x),))
+                                for f in self._compiled["torques"]])
+
+    def simulate(self, x0, t, *, u=None, rtol: float = 1e-10, atol: float = 1e-10) -> np.ndarray:
+        """Integrate the true system from ``x0`` ``(2k,)``; states at times ``t``, ``(m, 2k)``.
+        ``u``: inputs ``(m, r)`` at ``t`` (held linearly) or a callable ``u(t)``."""
+        from ..models.simulation import integrate
+
+        return integrate(self.rhs, x0, t, u=u, n_states=len(self.state_names),
+                         n_inputs=len(self.input_names), method="DOP853", rtol=rtol, atol=atol)
+
