@@ -13,10 +13,11 @@ import discrepancy as dc
 G = 9.81
 
 
-def chain(masses, lengths, frictions, coulomb=None):
+def chain(masses, lengths, frictions, coulomb=None, *, energies=False):
     """A planar chain of point masses on massless rods, joint angles ``q`` (``q_i`` relative
     to link ``i - 1``; the first from hanging down), viscous joint friction ``k_i`` (and
-    Coulomb ``F_i sign(dq_i)``, smoothed over 1e-3 rad/s). Returns ``(rhs(x), energy(x))``."""
+    Coulomb ``F_i sign(dq_i)``, smoothed over 1e-3 rad/s). Returns ``(rhs(x), energy(x))``,
+    and with ``energies`` also ``(T, V)`` in the symbols ``a1..an``, ``w1..wn``."""
     n = len(masses)
     q = me.dynamicsymbols(f"q1:{n + 1}")
     dq = me.dynamicsymbols(f"q1:{n + 1}", 1)
@@ -53,6 +54,8 @@ def chain(masses, lengths, frictions, coulomb=None):
     def energy(x):
         return np.array([energy_f(row[:n], row[n:]) for row in x], float)
 
+    if energies:
+        return rhs, energy, (kinetic.subs(to_plain), potential.subs(to_plain))
     return rhs, energy
 
 
@@ -87,3 +90,49 @@ def test_three_link_pendulum_in_joint_angles():
     for i, value in enumerate(k):
         assert found[f"viscous joint {i + 1}"] == pytest.approx(value, rel=0.02)
     assert model.variable_names_ == ["q1", "q2", "q3", "dq1", "dq2", "dq3"]
+
+
+@pytest.mark.parametrize("n", [1, 3])
+def test_lagrangian_system_equals_sympy_mechanics(n):
+    """LagrangianSystem derives from T and V alone what LagrangesMethod gives (with the
+    friction as a Rayleigh function); its energy and conservative torques agree too."""
+    k = [3e-3, 1.5e-3, 8e-4][:n]
+    masses, lengths = [0.3, 0.2, 0.1][:n], [0.3, 0.25, 0.2][:n]
+    rhs, energy, (kinetic, potential) = chain(masses, lengths, k, energies=True)
+    w = sp.symbols(f"w1:{n + 1}")
+    system = dc.systems.LagrangianSystem(
+        kinetic, potential, [f"a{i + 1}" for i in range(n)], rates=[s.name for s in w],
+        dissipation=sum(ki * wi ** 2 for ki, wi in zip(k, w, strict=True)) / 2)
+    x = np.random.default_rng(n).uniform(-2, 2, size=(20, 2 * n))
+    expected = np.array([rhs(0, row) for row in x])
+    np.testing.assert_allclose(system.rhs(x), expected, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(system.energy(x), energy(x), rtol=1e-12, atol=1e-12)
+    free = expected.copy()
+    free[:, n:] = np.array([rhs(0, np.r_[row[:n], 0 * row[n:]])[n:] for row in x])
+    at_rest = np.hstack([x[:, :n], np.zeros((20, n))])
+    np.testing.assert_allclose(system.flawed_model()(at_rest)[:, n:], free[:, n:], atol=1e-9)
+    if n == 1:  # -dV/dq of a point mass on a rod: -m g l sin(q)
+        np.testing.assert_allclose(system.conservative_torques(x)[:, 0],
+                                   -masses[0] * G * lengths[0] * np.sin(x[:, 0]), rtol=1e-12)
+
+
+def test_lagrangian_system_refuses_unknown_symbols():
+    a, w, m = sp.symbols("a w m")
+    with pytest.raises(dc.errors.ParameterError, match="m"):
+        dc.systems.LagrangianSystem(m * w ** 2 / 2, -sp.cos(a), ["a"], rates=["w"])
+
+
+def test_torque_limit_is_the_largest_gravity_torque_and_binds():
+    """'auto' bounds every friction torque by the largest gravity torque of the swing
+    (m g l max|sin q|); a tighter given limit holds the Coulomb coefficient at the limit."""
+    rhs, energy = chain([0.5], [0.4], [2e-3], coulomb=[4e-3])
+    t, x = swing(rhs, [2.6, 0.0], 20)
+    model = dc.DissipationDiscrepancy(energy).fit(x[:, :1], t)
+    edge = 15  # samples the default smoother drops at either end
+    largest = 0.5 * G * 0.4 * np.max(np.abs(np.sin(x[edge:-edge, 0])))
+    assert model.torque_limit_ == pytest.approx(largest, rel=1e-3)
+    tight = dc.DissipationDiscrepancy(energy, torque_limit=2e-3).fit(x[:, :1], t)
+    found = laws(tight)
+    assert found["Coulomb joint 1"] == pytest.approx(2e-3, rel=1e-6)
+    assert all(c <= bound * (1 + 1e-9) for c, bound in zip(tight.coef_, tight.fit_.upper,
+                                                           strict=True))

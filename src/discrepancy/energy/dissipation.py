@@ -35,6 +35,8 @@ class FrictionTerm:
         functions: numpy callables for undefined sympy functions in ``power`` (name ->
             callable of the function's arguments, each ``(m,)``), e.g. a force computed by
             the system model.
+        speed: the joint speed ``w`` the law acts at (sympy), when it is a torque: its torque
+            per unit coefficient is ``power / |w|``, which :func:`torque_bounds` limits.
     """
 
     name: str
@@ -42,6 +44,7 @@ class FrictionTerm:
     unit: str
     torque: str
     functions: Mapping[str, Callable] | None = field(default=None, compare=False)
+    speed: sp.Expr | None = field(default=None, compare=False)
 
 
 def default_friction_library(velocity_names, *, joints=None, stribeck_speed: float = 0.1,
@@ -73,7 +76,7 @@ def default_friction_library(velocity_names, *, joints=None, stribeck_speed: flo
                              f"{velocity_names!r}")
     speeds = [symbol(n) for n in velocity_names]
     joints = _joints(joints, speeds)
-    terms = [FrictionTerm(f"viscous {label}", w ** 2, "N m s", f"k ({w})")
+    terms = [FrictionTerm(f"viscous {label}", w ** 2, "N m s", f"k ({w})", speed=w)
              for label, w in joints.items()]
     for label, w in joints.items():
         if coulomb_smoothing is None:
@@ -81,15 +84,21 @@ def default_friction_library(velocity_names, *, joints=None, stribeck_speed: flo
         else:
             eps = sp.Float(coulomb_smoothing)
             power, law = w * sp.tanh(w / eps), f"F tanh(({w})/{coulomb_smoothing:g})"
-        terms.append(FrictionTerm(f"Coulomb {label}", power, "N m", law))
+        terms.append(FrictionTerm(f"Coulomb {label}", power, "N m", law, speed=w))
     for d in speeds:
         terms.append(FrictionTerm(f"air drag {d.name}", sp.Abs(d) ** 3, "N m s^2",
-                                  f"c {d} |{d}|"))
+                                  f"c {d} |{d}|", speed=d))
     vs = sp.Float(stribeck_speed)
     for label, w in joints.items():
         terms.append(FrictionTerm(f"Stribeck {label}", sp.Abs(w) * sp.exp(-(w / vs) ** 2), "N m",
-                                  f"F_s exp(-(({w})/{stribeck_speed:g})^2) sign({w})"))
+                                  f"F_s exp(-(({w})/{stribeck_speed:g})^2) sign({w})",
+                                  speed=w))
     return tuple(terms)
+
+
+def without_stribeck(terms) -> tuple[FrictionTerm, ...]:
+    """The library without its Stribeck terms (those of :func:`default_friction_library`)."""
+    return tuple(term for term in terms if not term.name.startswith("Stribeck "))
 
 
 def _joints(joints, speeds) -> dict[str, sp.Expr]:
@@ -145,6 +154,29 @@ def integrated_powers(terms, values: np.ndarray, t: np.ndarray, names) -> np.nda
     return cumulative_trapezoid(np.column_stack(columns), t, axis=0, initial=0.0)
 
 
+def torque_bounds(terms, values: np.ndarray, names, limit: float) -> np.ndarray:
+    """Largest coefficient ``(p,)`` each term may take so that its torque stays within
+    ``limit`` (N m) at every sample of ``values`` (``inf`` for terms without a ``speed``).
+
+    A term's torque per unit coefficient is ``power / |speed|``; where the speed is ~0 its
+    limit (e.g. a Coulomb or Stribeck torque's full size) is taken from the samples nearby.
+    """
+    upper = np.full(len(terms), np.inf)
+    if not np.isfinite(limit):
+        return upper
+    for j, term in enumerate(terms):
+        if term.speed is None:
+            continue
+        power = compile_numpy(term.power, list(names), term.functions)(values)
+        speed = np.abs(compile_numpy(term.speed, list(names))(values))
+        moving = speed > 1e-6 * max(float(np.max(speed)), 1e-300)
+        per_unit = np.max(np.broadcast_to(power, speed.shape)[moving] / speed[moving],
+                          initial=0.0)
+        if per_unit > 0:
+            upper[j] = limit / per_unit
+    return upper
+
+
 def block_means(values: np.ndarray, block: int) -> np.ndarray:
     """Means over consecutive blocks of ``block`` samples (a last partial block is dropped):
     ``(m, ...)`` -> ``(m // block, ...)``."""
@@ -159,8 +191,9 @@ def block_weights(target: np.ndarray, block: int) -> np.ndarray:
 
 
 def nonnegative_fit(features: np.ndarray, target: np.ndarray, block: int | None = None,
-                     weights: np.ndarray | None = None) -> np.ndarray:
-    """``[c, xi]`` of ``target ~ c + features @ xi`` with ``xi >= 0``.
+                    weights: np.ndarray | None = None, upper: np.ndarray | None = None
+                    ) -> np.ndarray:
+    """``[c, xi]`` of ``target ~ c + features @ xi`` with ``0 <= xi <= upper``.
 
     ``block=None``: least squares on the cumulative curves. ``block=b`` (samples): the energy
     lost from one block of ``b`` samples to the next is fitted with *relative* weights
@@ -170,19 +203,26 @@ def nonnegative_fit(features: np.ndarray, target: np.ndarray, block: int | None 
     between the blocks' mean levels, not between single samples at their edges: a single
     sample carries the full pointwise noise of ``H_m``, which in the relative weights of the
     small late losses picked wrong laws on simulated encoder data (see the tests).
+    ``upper`` ``(p,)``: physical limits of the coefficients (:func:`torque_bounds`).
     """
+    k = features.shape[1]
+    upper = np.full(k, np.inf) if upper is None else np.asarray(upper, float)
     if block is not None:
         loss = np.diff(block_means(target, block))
         gained = np.diff(block_means(features, block), axis=0)
         w = block_weights(target, block) if weights is None else weights
         scale = np.maximum(np.max(np.abs(gained), axis=0), 1e-300)
-        xi, _ = nnls(gained * w[:, None] / scale, loss * w)
+        design = gained * w[:, None] / scale
+        if np.all(np.isinf(upper)):
+            xi, _ = nnls(design, loss * w)
+        else:
+            xi = lsq_linear(design, loss * w, bounds=(0.0, upper * scale), method="bvls").x
         xi = xi / scale
         return np.concatenate([[np.mean(target - features @ xi)], xi])
     design = np.column_stack([np.ones(len(target)), features])
     scale = np.maximum(np.max(np.abs(design), axis=0), 1e-300)
-    k = features.shape[1]
-    sol = lsq_linear(design / scale, target, bounds=([-np.inf] + [0.0] * k, [np.inf] * (k + 1)),
+    sol = lsq_linear(design / scale, target,
+                     bounds=([-np.inf] + [0.0] * k, np.r_[np.inf, upper * scale[1:]]),
                      method="bvls")
     return sol.x / scale
 
@@ -192,8 +232,8 @@ def _predict(coef: np.ndarray, features: np.ndarray) -> np.ndarray:
 
 
 def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 4,
-                 holdout: float = 0.0, tolerance: float = 0.02, block: int | None = None
-                 ) -> tuple[tuple[int, ...], list]:
+                 holdout: float = 0.0, tolerance: float = 0.02, block: int | None = None,
+                 upper: np.ndarray | None = None) -> tuple[tuple[int, ...], list]:
     """Best non-negative subset of at most ``max_terms`` columns (exhaustive search).
 
     Score of a subset: with ``holdout = 0`` the RMS training error (J) after a moving average
@@ -205,7 +245,8 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     bound 0 duplicate a smaller subset and are skipped. The size grows from 1 while the best
     score of the next size is lower by more than the fraction ``tolerance`` (an elbow rule:
     the cumulative features are strongly correlated, so noise alone lowers the error a little
-    with every term). ``block`` chooses the fit (see ``nonnegative_fit``).
+    with every term). ``block`` chooses the fit and ``upper`` bounds the coefficients (see
+    ``nonnegative_fit``).
 
     Returns ``(support, candidates)`` with ``candidates`` the sorted ``(score, subset)`` list;
     ``support`` is empty when no law fits with positive coefficients (no dissipation seen).
@@ -217,12 +258,13 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     if not 0 <= holdout < 0.9:
         raise ParameterError(f"holdout must be a fraction in [0, 0.9); got {holdout}")
     cut = int(round(m * (1 - holdout)))
+    upper = np.full(p, np.inf) if upper is None else np.asarray(upper, float)
     smooth = max(1, m // 100)
     candidates = []
     for k in range(1, max_terms + 1):
         for subset in combinations(range(p), k):
             cols = features[:, subset]
-            coef = nonnegative_fit(cols[:cut], delta_h[:cut], block)
+            coef = nonnegative_fit(cols[:cut], delta_h[:cut], block, upper=upper[list(subset)])
             if np.any(coef[1:] == 0):
                 continue
             error = delta_h - _predict(coef, cols)
@@ -257,21 +299,26 @@ class DissipationFit:
     coefficients: np.ndarray     # (k,), in each term's unit
     offset: float                # J
     candidates: list             # (score, names) of every subset tried
+    upper: np.ndarray | None = None   # (k,) physical limits of the coefficients
 
 
 def fit_dissipation(features: np.ndarray, delta_h: np.ndarray, terms,
                     **selection) -> DissipationFit:
     """Select terms (:func:`select_terms`) and refit them on all samples."""
     support, candidates = select_terms(features, delta_h, **selection)
-    if support:
-        coef = nonnegative_fit(features[:, support], delta_h, selection.get("block"))
-        kept = [k for k in range(len(support)) if coef[1 + k] > 0]  # refitted to 0: dropped
-        if len(kept) < len(support):
-            support = tuple(support[k] for k in kept)
-            coef = nonnegative_fit(features[:, support], delta_h, selection.get("block")) \
-                if support else np.array([np.mean(delta_h)])
-    else:
-        coef = np.array([np.mean(delta_h)])
+    upper = selection.get("upper")
+    upper = np.full(features.shape[1], np.inf) if upper is None else np.asarray(upper, float)
+
+    def refit(subset):
+        return nonnegative_fit(features[:, subset], delta_h, selection.get("block"),
+                               upper=upper[list(subset)])
+
+    coef = refit(support) if support else np.array([np.mean(delta_h)])
+    kept = [k for k in range(len(support)) if coef[1 + k] > 0]  # refitted to 0: dropped
+    if len(kept) < len(support):
+        support = tuple(support[k] for k in kept)
+        coef = refit(support) if support else np.array([np.mean(delta_h)])
     named = [(s, [terms[i].name for i in sub]) for s, sub in candidates]
     return DissipationFit(terms=tuple(terms[i] for i in support), coefficients=coef[1:],
-                          offset=float(coef[0]), candidates=named)
+                          offset=float(coef[0]), candidates=named,
+                          upper=upper[list(support)])

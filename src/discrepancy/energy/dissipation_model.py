@@ -3,11 +3,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..constraints import Integral, Interval, Predicate, Real
+from ..constraints import Integral, Interval, Options, Predicate, Real
 from ..errors import ParameterError
 from ..symbolic import feature_name
 from .base import DIFFERENTIATION, ENERGY, NAMES, EnergyModel
-from .dissipation import FrictionTerm, default_friction_library, fit_dissipation, integrated_powers
+from .dissipation import (
+    FrictionTerm,
+    default_friction_library,
+    fit_dissipation,
+    integrated_powers,
+    torque_bounds,
+)
 from .uncertainty import DissipationUncertainty, bootstrap_dissipation, quantile_band
 
 TERMS = [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
@@ -36,6 +42,12 @@ class DissipationDiscrepancy(EnergyModel):
         holdout, tolerance: term selection (:func:`~discrepancy.energy.select_terms`).
         block_seconds: ``None``: least squares on the cumulative curve; a length (s): the
             energy lost per block of that length, with relative weights.
+        torque_limit: the largest torque (N m, or N for a linear coordinate) any friction
+            law may exert in the data, a constraint of the fit: ``"auto"`` (default) the
+            largest conservative torque ``|∂H_m(q, 0)/∂q|`` along the recording (a larger
+            static friction would hold the system at its turning points), a number, or
+            ``None`` for no bound. Mount losses and other terms without a joint speed are
+            not bounded.
     """
 
     _parameter_constraints = {
@@ -44,17 +56,19 @@ class DissipationDiscrepancy(EnergyModel):
         "holdout": [Interval(Real, 0, 0.9, closed="left")],
         "tolerance": [Interval(Real, 0, 1)],
         "block_seconds": [None, Interval(Real, 0, None, closed="neither")],
+        "torque_limit": [None, Options({"auto"}), Interval(Real, 0, None, closed="neither")],
         "differentiation_method": DIFFERENTIATION, "position_names": NAMES}
 
     def __init__(self, energy=None, *, friction_terms=None, max_terms: int = 4,
                  holdout: float = 0.0, tolerance: float = 0.02, block_seconds: float | None = None,
-                 differentiation_method=None, position_names=None):
+                 torque_limit="auto", differentiation_method=None, position_names=None):
         self.energy = energy
         self.friction_terms = friction_terms
         self.max_terms = max_terms
         self.holdout = holdout
         self.tolerance = tolerance
         self.block_seconds = block_seconds
+        self.torque_limit = torque_limit
         self.differentiation_method = differentiation_method
         self.position_names = position_names
 
@@ -83,12 +97,25 @@ class DissipationDiscrepancy(EnergyModel):
         delta_h = self.measured_delta_h(x)
         self.e0_ = float(self._energy(x[:1])[0])
         features = integrated_powers(terms, x, t, self.variable_names_)
+        self.torque_limit_ = self._torque_limit(x)
+        upper = torque_bounds(terms, x, self.variable_names_, self.torque_limit_)
         self.fit_ = fit_dissipation(features, delta_h, terms, block=self._block(t),
                                     max_terms=min(self.max_terms, len(terms)),
-                                    holdout=self.holdout, tolerance=self.tolerance)
+                                    holdout=self.holdout, tolerance=self.tolerance, upper=upper)
         self.terms_, self.coef_, self.offset_ = self.fit_.terms, self.fit_.coefficients, \
             self.fit_.offset
         return self
+
+    def _torque_limit(self, x) -> float:
+        """The bound of every friction torque (N m): see ``torque_limit``; ``inf`` for none
+        (also when the model energy has no potential to compare with)."""
+        if self.torque_limit is None:
+            return np.inf
+        if self.torque_limit != "auto":
+            return float(self.torque_limit)
+        torques = conservative_torques(self._energy, x)
+        largest = float(np.max(np.abs(torques)))
+        return largest if largest > 0 else np.inf
 
     def _predict(self, x, t, start: float) -> np.ndarray:
         """``start + Σ ξ_j ∫ θ_j dt``: ``start = 0`` on a new trajectory (``dH(t0) = 0``),
@@ -112,7 +139,7 @@ class DissipationDiscrepancy(EnergyModel):
         features = integrated_powers(self.terms_, x, t, self.variable_names_)
         return bootstrap_dissipation(
             features, self.measured_delta_h(x), self.coef_, self.offset_,
-            [term.name for term in self.terms_], fit_block=self._block(t),
+            [term.name for term in self.terms_], fit_block=self._block(t), upper=self.fit_.upper,
             n_resamples=n_resamples, samples_per_block=max(2, int(round(block_seconds / dt))),
             seed=seed)
 
@@ -152,3 +179,20 @@ class DissipationDiscrepancy(EnergyModel):
         body = " + ".join(f"{t['coefficient']:.4g} [{t['unit']}] {t['power']}"
                           for t in self.identified_terms())
         return f"P_loss = {body or '0'}  (W)"
+
+
+def conservative_torques(energy, x, *, max_rows: int = 5000) -> np.ndarray:
+    """``-∂H(q, 0)/∂q`` ``(m', k)`` at (up to ``max_rows`` evenly spaced) states ``x = [q, dq]``
+    ``(m, 2k)``: the conservative torques, by central differences of the energy at rest (for a
+    mechanical energy ``T + V`` with ``T = 0`` at rest this is ``-∂V/∂q``)."""
+    k = x.shape[1] // 2
+    rest = x[::max(1, len(x) // max_rows)].copy()
+    rest[:, k:] = 0.0
+    torques = np.empty((len(rest), k))
+    for i in range(k):
+        h = 1e-6 * max(1.0, float(np.max(np.abs(rest[:, i]))))
+        up, down = rest.copy(), rest.copy()
+        up[:, i] += h
+        down[:, i] -= h
+        torques[:, i] = -(energy(up) - energy(down)) / (2 * h)
+    return torques
