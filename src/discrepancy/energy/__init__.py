@@ -7,15 +7,17 @@ from .dissipation import (
     integrated_powers,
     select_terms,
     support_loss_terms,
+    without_stribeck,
 )
 from .dissipation_model import DissipationDiscrepancy
 from .hamiltonian import EnergyTautologyWarning, check_span, energy_span_residual
 from .metrics import error_summary, percent_error
+from .protocol import BlindFit, blind_fit, default_procedures
 from .state_form import EnergyDiscrepancy
 from .uncertainty import DissipationUncertainty
 
-__all__ = ["DissipationDiscrepancy", "DissipationFit", "DissipationUncertainty",
-           "EnergyDiscrepancy", "EnergyTautologyWarning", "FrictionTerm", "check_span",
-           "default_friction_library", "energy_span_residual", "error_summary",
-           "fit_dissipation", "integrated_powers", "percent_error", "select_terms",
-           "support_loss_terms"]
+__all__ = ["BlindFit", "DissipationDiscrepancy", "DissipationFit", "DissipationUncertainty",
+           "EnergyDiscrepancy", "EnergyTautologyWarning", "FrictionTerm", "blind_fit",
+           "check_span", "default_friction_library", "default_procedures",
+           "energy_span_residual", "error_summary", "fit_dissipation", "integrated_powers",
+           "percent_error", "select_terms", "support_loss_terms", "without_stribeck"]

@@ -1,0 +1,100 @@
+"""The blind protocol: procedures chosen from training data alone, frozen, validated once."""
+import numpy as np
+import pytest
+import sympy as sp
+
+import discrepancy as dc
+from discrepancy.energy import blind_fit, default_procedures
+from discrepancy.errors import DataError, ParameterError
+
+M, L, G, K, F = 0.5, 0.4, 9.81, 2e-3, 4e-3
+
+
+@pytest.fixture(scope="module")
+def swing():
+    """A rod pendulum (T, V written by hand) with viscous and smoothed Coulomb friction,
+    24 s at 1 kHz read by a 5000-count encoder; validation is the last 20 %."""
+    q, w = sp.symbols("q dq")
+    inertia = M * L ** 2 / 3
+    system = dc.systems.LagrangianSystem(
+        inertia * w ** 2 / 2, -M * G * L / 2 * sp.cos(q), ["q"],
+        dissipation=K * w ** 2 / 2 + F * sp.sqrt(w ** 2 + 1e-6))
+    t = np.arange(24001) / 1000
+    x = system.simulate([2.6, 0.0], t, rtol=1e-11, atol=1e-11)
+    step = 2 * np.pi / 5000
+    angles = np.round(x[:, :1] / step) * step
+    return system, angles, t, int(0.8 * len(t))
+
+
+@pytest.fixture(scope="module")
+def blind(swing):
+    system, q, t, split = swing
+    return blind_fit(dc.DissipationDiscrepancy(system.energy), q, t, split=split,
+                     progress=False)
+
+
+def test_chooses_the_true_law_from_training_alone(swing, blind):
+    laws = {term.name: c for term, c in zip(blind.model.terms_, blind.model.coef_, strict=True)}
+    assert set(laws) == {"viscous joint 1", "Coulomb joint 1"}
+    assert laws["viscous joint 1"] == pytest.approx(K, rel=0.02)
+    assert laws["Coulomb joint 1"] == pytest.approx(F, rel=0.02)
+    _, _, t, split = swing
+    assert all(o + blind.horizon <= t[split - 1] + 1e-9 for o in blind.origins)
+    assert len(blind.procedures) == 8    # 2 libraries x 2 fits x 2 selections
+
+
+def test_nothing_after_the_split_is_read(swing, blind):
+    """Replacing the validation part by other data changes nothing."""
+    system, q, t, split = swing
+    other = q.copy()
+    other[split:] = np.random.default_rng(1).uniform(-3, 3, size=other[split:].shape)
+    again = blind_fit(dc.DissipationDiscrepancy(system.energy), other, t, split=split,
+                      progress=False)
+    assert again.chosen == blind.chosen
+    np.testing.assert_array_equal(again.model.coef_, blind.model.coef_)
+    assert again.procedures == blind.procedures
+
+
+def test_form_error_band_holds_the_validation_window(swing, blind):
+    """The band from the rolling-origin forecasts (nominal 2/3 with 5 origins) holds most
+    of the measured dH over validation, which the law continues from training."""
+    system, q, t, split = swing
+    model = blind.model
+    x, times = model.states(q, t)
+    k = int(np.searchsorted(times, t[split]))
+    dh, pred = model.measured_delta_h(x), model.predict(q, t, start=model.offset_)
+    low, high = blind.forecast_band(pred[k:], times[k:])
+    inside = np.mean((low <= dh[k:]) & (dh[k:] <= high))
+    assert inside >= 0.6
+    assert np.all(high - low > 0)
+
+
+def test_restricted_choice_and_bad_arguments(swing, blind):
+    system, q, t, split = swing
+    names = [n for n in blind.procedures if "no Stribeck" in n]
+    sub = blind.restricted(names)
+    best = min(names, key=lambda n: blind.procedures[n]["forecast_median_percent_of_range"])
+    assert sub.chosen == best and set(sub.procedures) == set(names)
+    with pytest.raises(ParameterError, match="unknown"):
+        blind.restricted(["no such procedure"])
+    model = dc.DissipationDiscrepancy(system.energy)
+    with pytest.raises(ParameterError, match="split"):
+        blind_fit(model, q, t, split=len(t))
+    with pytest.raises(ParameterError, match="n_origins"):
+        blind_fit(model, q, t, split=split, n_origins=1)
+    with pytest.raises(ParameterError, match="candidates"):
+        blind_fit({"a": 1}, q, t, split=split)
+    with pytest.raises(ParameterError, match="horizon"):
+        blind_fit(model, q, t, split=split, horizon=-1.0)
+    with pytest.raises(DataError, match="too short"):
+        blind_fit(model, q, t, split=split, horizon=15.0)
+
+
+def test_default_procedures_vary_fit_selection_and_library(swing):
+    system, *_ = swing
+    procedures = default_procedures(dc.DissipationDiscrepancy(system.energy), 32.0, 1)
+    params = [p.get_params(deep=False) for p in procedures.values()]
+    assert {p["block_seconds"] for p in params} == {None, 1.0}
+    assert {p["holdout"] for p in params} == {0.0, 0.2}
+    sizes = {len(p["friction_terms"]) for p in params}
+    assert sizes == {4, 3}      # viscous, Coulomb, air drag (+ Stribeck)
