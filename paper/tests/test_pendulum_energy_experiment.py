@@ -134,3 +134,20 @@ def test_measured_swing(tmp_path):
         rig["validation_continued"]["max_abs_percent_of_range"] / 10
     spans = results["state_form"]["paper library + cos(phi1-phi2) dphi1 dphi2 (spans H_m)"]
     assert spans["tautology_warning"]
+    # the default procedure (no mount library) is reported blind beside the chosen one, with
+    # its law's magnitudes: every joint torque well below the largest gravity torque
+    default = results["default_procedure_blind"]
+    assert "mount" not in default["chosen_procedure"]
+    assert np.isfinite(default["validation_continued_percent_of_range"])
+    assert len(default["training_internal_forecast_errors_percent_of_range"]) == \
+        len(results["forecast_origins_s"])
+    assert all(0 < r["mean_torque_over_largest_conservative"] < 1 for r in default["terms"]
+               if "mean_torque_over_largest_conservative" in r)
+    assert sum(r["share_percent"] for r in default["terms"]) == pytest.approx(100)
+    mount = results["mount_question"]
+    assert mount["training_forecasts_prefer_mount_loss"] == (
+        mount["with mount loss"]["training_internal_forecast_median_percent_of_range"]
+        < mount["without mount loss"]["training_internal_forecast_median_percent_of_range"])
+    assert any("mount" in c for c in results["choices_made_after_seeing_validation"])
+    band = main["form_error_band"]
+    assert 0 <= band["inside_band_fraction_of_1_s_mean"] <= 1

@@ -11,6 +11,7 @@ EXPERIMENTS = {
     "vdp-structure": ("van_der_pol", "run_structure"),
     "pendulum-energy": ("pendulum_energy", "run_synthetic"),
     "pendulum-energy-experiment": ("pendulum_energy", "run_experiment"),
+    "energy-systems": ("energy_systems", "run"),
     "cart-swingup": ("cart_swingup", "run"),
     "cart-mpc": ("cart_mpc", "run"),
     "cart-leaderboard": ("cart_leaderboard", "run"),

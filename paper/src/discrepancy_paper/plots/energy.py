@@ -31,7 +31,8 @@ def fit_figure(panels, *, title: str = ""):
         panels: list of dicts with ``t``, ``delta_h``, ``model`` (J), ``error`` (%),
             ``label`` (e.g. "training") and ``error_label`` (the normaliser); optionally
             ``error_band`` ``(low, high)`` (%), the errors a model's uncertainty allows
-            (shaded; where it holds 0 the measured dH is inside the model's band).
+            (shaded; where it holds 0 the measured dH is inside the model's band) and
+            ``band_label`` naming it (default: the 95 % bootstrap band).
     """
     fig, axes = plt.subplots(2, len(panels), figsize=(5.5 * len(panels), 5.6), squeeze=False)
     for j, p in enumerate(panels):
@@ -42,7 +43,8 @@ def fit_figure(panels, *, title: str = ""):
         axes[0, j].legend(fontsize=8)
         if "error_band" in p:
             axes[1, j].fill_between(p["t"], *p["error_band"], color="tab:red", alpha=0.15,
-                                    lw=0, label="95 % band of the model (bootstrap)")
+                                    lw=0, label=p.get("band_label",
+                                                      "95 % band of the model (bootstrap)"))
             axes[1, j].legend(fontsize=8)
         axes[1, j].plot(p["t"], p["error"], color="tab:red", lw=0.7)
         axes[1, j].set_ylabel(p.get("error_label", "error (%)"))
