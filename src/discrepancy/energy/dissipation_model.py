@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..constraints import Integral, Interval, Options, Predicate, Real
+from ..data.trajectory import as_2d, as_times
 from ..errors import ParameterError
 from ..symbolic import feature_name
 from .base import DIFFERENTIATION, ENERGY, NAMES, EnergyModel
@@ -48,6 +49,10 @@ class DissipationDiscrepancy(EnergyModel):
             static friction would hold the system at its turning points), a number, or
             ``None`` for no bound. Mount losses and other terms without a joint speed are
             not bounded.
+        fit_window: fit on the last ``fit_window`` seconds of the data only (``None``: all
+            of it): the regime a forecast continues, when a decay passes through regimes
+            that one law of a small library does not describe equally well. ``fit_start_``
+            records where the fitted data begin; :meth:`anchored` compares there.
     """
 
     _parameter_constraints = {
@@ -57,11 +62,13 @@ class DissipationDiscrepancy(EnergyModel):
         "tolerance": [Interval(Real, 0, 1)],
         "block_seconds": [None, Interval(Real, 0, None, closed="neither")],
         "torque_limit": [None, Options({"auto"}), Interval(Real, 0, None, closed="neither")],
+        "fit_window": [None, Interval(Real, 0, None, closed="neither")],
         "differentiation_method": DIFFERENTIATION, "position_names": NAMES}
 
     def __init__(self, energy=None, *, friction_terms=None, max_terms: int = 4,
                  holdout: float = 0.0, tolerance: float = 0.02, block_seconds: float | None = None,
-                 torque_limit="auto", differentiation_method=None, position_names=None):
+                 torque_limit="auto", fit_window: float | None = None,
+                 differentiation_method=None, position_names=None):
         self.energy = energy
         self.friction_terms = friction_terms
         self.max_terms = max_terms
@@ -69,6 +76,7 @@ class DissipationDiscrepancy(EnergyModel):
         self.tolerance = tolerance
         self.block_seconds = block_seconds
         self.torque_limit = torque_limit
+        self.fit_window = fit_window
         self.differentiation_method = differentiation_method
         self.position_names = position_names
 
@@ -87,10 +95,22 @@ class DissipationDiscrepancy(EnergyModel):
                                  f"the fit needs at least {MIN_BLOCKS} (use shorter blocks)")
         return block
 
+    def _window(self, q, t, dq):
+        """The last ``fit_window`` seconds of ``(q, t, dq)`` (all of them for ``None``)."""
+        q = as_2d("q", q, allow_1d=True)
+        t = as_times("t", t, len(q))
+        if self.fit_window is None:
+            return q, t, dq
+        keep = t >= t[-1] - self.fit_window
+        return q[keep], t[keep], None if dq is None else as_2d(
+            "dq", dq, n_rows=len(keep), n_cols=q.shape[1], allow_1d=True)[keep]
+
     def fit(self, q, t, *, dq=None) -> DissipationDiscrepancy:
         """Fit on one trajectory of positions ``q`` ``(m, k)`` at times ``t`` (s or a step)."""
         self._validate_params()
+        q, t, dq = self._window(q, t, dq)
         x, t = self.states(q, t, dq=dq)
+        self.fit_start_ = float(t[0])
         k = x.shape[1] // 2
         self.variable_names_ = self.variable_names(k)
         terms = self._terms(k)
@@ -105,6 +125,19 @@ class DissipationDiscrepancy(EnergyModel):
         self.terms_, self.coef_, self.offset_ = self.fit_.terms, self.fit_.coefficients, \
             self.fit_.offset
         return self
+
+    def anchored(self, x, t) -> tuple[np.ndarray, np.ndarray]:
+        """``(dH, model)`` (J), each ``(m,)``, over states ``x`` ``(m, 2k)`` at times ``t`` of
+        the training recording (continued past its end, or begun before a ``fit_window``),
+        both anchored where the fitted data begin (``fit_start_``): ``dH = H_m(x(fit_start_))
+        - H_m(x)`` and ``model = offset_ + Σ ξ_j ∫_{fit_start_}^t θ_j dt``. Samples before
+        ``fit_start_`` are the law run backwards."""
+        self.check_is_fitted()
+        t = np.asarray(t, float)
+        k = int(np.argmin(np.abs(t - self.fit_start_)))
+        dh = self.measured_delta_h(x, e0=float(self._energy(x[k:k + 1])[0]))
+        model = self._predict(x, t, 0.0)
+        return dh, model - model[k] + self.offset_
 
     def _torque_limit(self, x) -> float:
         """The bound of every friction torque (N m): see ``torque_limit``; ``inf`` for none
@@ -134,6 +167,7 @@ class DissipationDiscrepancy(EnergyModel):
         if not isinstance(block_seconds, (int, float)) or not np.isfinite(block_seconds) or \
                 block_seconds <= 0:
             raise ParameterError(f"block_seconds must be > 0 s; got {block_seconds!r}")
+        q, t, dq = self._window(q, t, dq)
         x, t = self.states(q, t, dq=dq)
         dt = float(np.median(np.diff(t)))
         features = integrated_powers(self.terms_, x, t, self.variable_names_)

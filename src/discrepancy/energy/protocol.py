@@ -4,7 +4,8 @@ Each candidate procedure (a :class:`DissipationDiscrepancy` with its library, fi
 selection) is fitted on ``[0, origin)`` and forecasts the next ``horizon`` seconds, from
 several origins inside the training part (rolling origin; the last window ends where
 training ends). The procedure with the lowest median forecast error is frozen and fitted on
-the whole training part before the validation part is touched. The spread of the chosen
+the whole training part before the validation part is touched (near ties, within 2 %, go to
+the first candidate, so the simpler procedure listed first). The spread of the chosen
 procedure's own forecast errors, as a function of the lead time, is the error of the law's
 form that a coefficient bootstrap does not see: :meth:`BlindFit.forecast_band` adds it.
 Written here because no library does rolling-origin selection of constrained energy laws.
@@ -68,7 +69,7 @@ class BlindFit:
         if not names or unknown:
             raise ParameterError(f"names must be procedures of this comparison; unknown: "
                                  f"{sorted(unknown) or 'none given'}")
-        chosen = min(names, key=lambda n: self.procedures[n]["forecast_median_percent_of_range"])
+        chosen = _choose({n: self.procedures[n] for n in names})
         return replace(self, chosen=chosen,
                        procedures={n: self.procedures[n] for n in names},
                        lead_errors={n: self.lead_errors[n] for n in names},
@@ -87,24 +88,32 @@ class BlindFit:
         return prediction - width, prediction + width
 
 
+#: fit windows compared by default, as shares of the training part (None: all of it)
+WINDOWS = (None, 0.5, 0.3)
+
+
 def default_procedures(model: DissipationDiscrepancy, training_seconds: float,
                        n_positions: int, *, libraries: Mapping | None = None
                        ) -> dict[str, DissipationDiscrepancy]:
     """The procedures compared by default, for the given model (its energy, smoothing and
     torque limit): each library of ``libraries`` (``{name: friction terms}``; default the
-    model's library with and without its Stribeck terms) x cumulative or per-block energy
-    loss (blocks of 1/32 of the training part) x terms chosen by the elbow of the training
-    error or by forecasting its last 20 %."""
+    model's library with and without its Stribeck terms) x the data fitted (all of it, or
+    the most recent half or 30 %: the regime a forecast continues) x cumulative or
+    per-block energy loss (blocks of 1/32 of the training part) x terms chosen by the elbow
+    of the training error or by forecasting its last 20 %."""
     if libraries is None:
         terms = model._terms(n_positions)
         libraries = {"full library": terms, "no Stribeck": without_stribeck(terms)}
     block = training_seconds / 32
     out = {}
     for library, terms in libraries.items():
-        for fit, seconds in (("cumulative", None), (f"{block:.3g} s blocks", block)):
-            for selection, holdout in (("elbow", 0.0), ("hold-out 20 %", 0.2)):
-                out[f"{library}, {fit}, {selection}"] = clone(model).set_params(
-                    block_seconds=seconds, holdout=holdout, friction_terms=list(terms))
+        for share in WINDOWS:
+            window = "all data" if share is None else f"last {100 * share:g} %"
+            for fit, seconds in (("cumulative", None), (f"{block:.3g} s blocks", block)):
+                for selection, holdout in (("elbow", 0.0), ("hold-out 20 %", 0.2)):
+                    out[f"{library}, {window}, {fit}, {selection}"] = clone(model).set_params(
+                        block_seconds=seconds, holdout=holdout, friction_terms=list(terms),
+                        fit_window=None if share is None else share * training_seconds)
     return out
 
 
@@ -114,8 +123,7 @@ def forecast_error(model: DissipationDiscrepancy, q, t, start: int, *, dq=None
     with the error relative to the window's ``dH`` range."""
     x, times = model.states(q, t, dq=dq)
     k = int(np.searchsorted(times, t[start]))
-    dh = model.measured_delta_h(x)
-    pred = model._predict(x, times, model.offset_)
+    dh, pred = model.anchored(x, times)
     scale = max(float(np.ptp(dh[k:])), 1e-300)
     return times[k:], (dh[k:] - pred[k:]) / scale, error_summary(dh[k:], pred[k:])
 
@@ -185,12 +193,23 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
                        "forecast_median_percent_of_range": float(np.median(errors)),
                        "terms": [term.name for term in final.terms_]}
         fitted[name], curves[name] = final, leads
-    chosen = min(table, key=lambda n: table[n]["forecast_median_percent_of_range"])
+    chosen = _choose(table)
     lead_times = np.linspace(0.0, horizon, 200)
     lead_errors = {name: np.array([np.interp(lead_times, lt, rel) for lt, rel in leads])
                    for name, leads in curves.items()}
     return BlindFit(chosen, table, [float(t[s]) for s in starts], float(horizon), lead_times,
                     lead_errors, fitted)
+
+
+#: procedures whose median forecast error is within this fraction of the best tie; the
+#: first of them in the candidates' order (all data before windows, simpler fits first) wins
+TIE = 0.02
+
+
+def _choose(table: dict) -> str:
+    best = min(row["forecast_median_percent_of_range"] for row in table.values())
+    return next(name for name, row in table.items()
+                if row["forecast_median_percent_of_range"] <= best * (1 + TIE))
 
 
 def _progress(items, progress):

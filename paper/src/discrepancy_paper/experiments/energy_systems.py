@@ -2,10 +2,10 @@
 
 Each system is written as kinetic and potential energy in sympy
 (:class:`~discrepancy.systems.LagrangianSystem`), its true friction as a dissipation function
-(viscous ``k w^2 / 2``, Coulomb ``F sqrt(w^2 + eps^2)``, a smoothed ``F |w|``), simulated at 1 kHz and read by
-5000-count encoders. The dissipation model is fitted with its defaults only; then the blind
-protocol (:func:`~discrepancy.energy.blind_fit`) chooses a procedure on the first 80 % and is
-validated once on the rest, with the coverage of its form-error band.
+(viscous ``k w^2 / 2``, Coulomb ``F sqrt(w^2 + eps^2)``, a smoothed ``F |w|``), simulated at
+1 kHz and read by 5000-count encoders. The dissipation model is fitted with its defaults
+only; then the blind protocol (:func:`~discrepancy.energy.blind_fit`) chooses a procedure on
+the first 80 % and is validated once on the rest, with the coverage of its form-error band.
 """
 from __future__ import annotations
 
