@@ -117,3 +117,19 @@ def test_fit_window_fits_the_last_seconds_and_anchors_there(swing):
     k = int(np.argmin(np.abs(times - windowed.fit_start_)))
     assert dh[k] == 0 and model[k] == pytest.approx(windowed.offset_)
     assert np.sqrt(np.mean((dh[k:] - model[k:]) ** 2)) < 0.01 * np.ptp(dh[k:])
+
+
+def test_from_system_takes_names_and_relative_joints_from_the_system():
+    """A double pendulum in absolute angles: the elbow turns at dphi1 - dphi2, and the names
+    are the system's, not q1, q2."""
+    pend = dc.systems.DoublePendulum()
+    model = dc.DissipationDiscrepancy.from_system(pend, max_terms=2)
+    names = [term.name for term in model.friction_terms]
+    assert "viscous joint 2" in names and model.position_names == ["phi1", "phi2"]
+    elbow = next(term for term in model.friction_terms if term.name == "viscous joint 2")
+    phi = sp.symbols("dphi1 dphi2")
+    assert sp.simplify(elbow.power.subs(dict(zip(sorted(elbow.power.free_symbols, key=str),
+                                                 phi, strict=True))) - (phi[0] - phi[1]) ** 2) == 0
+    assert model.max_terms == 2
+    with pytest.raises(ParameterError, match="joints"):
+        dc.DissipationDiscrepancy.from_system(dc.systems.VanDerPol())

@@ -80,6 +80,22 @@ class DissipationDiscrepancy(EnergyModel):
         self.differentiation_method = differentiation_method
         self.position_names = position_names
 
+    @classmethod
+    def from_system(cls, system, **kwargs) -> DissipationDiscrepancy:
+        """A model of ``system`` (e.g. a :class:`~discrepancy.systems.LagrangianSystem` or
+        :class:`~discrepancy.systems.DoublePendulum`): its energy, its coordinates' names and
+        the default friction laws of its joints (``system.joints()``, relative joints
+        included); other keyword arguments as for the constructor."""
+        for needed in ("energy", "position_names", "joints"):
+            if not hasattr(system, needed):
+                raise ParameterError(f"system must have energy, position_names and joints() "
+                                     f"(a mechanical system); {type(system).__name__} has no "
+                                     f"{needed}")
+        names = list(system.position_names)
+        kwargs.setdefault("friction_terms", list(default_friction_library(
+            [f"d{n}" for n in names], joints=system.joints())))
+        return cls(system.energy, position_names=names, **kwargs)
+
     def _terms(self, k: int) -> tuple[FrictionTerm, ...]:
         if self.friction_terms is not None:
             return tuple(self.friction_terms)

@@ -281,8 +281,7 @@ def friction_library(pend: DoublePendulum, **kwargs):
 
 def dissipation_model(pend: DoublePendulum, **kwargs) -> DissipationDiscrepancy:
     """A dissipation-form model of ``pend`` with its names and friction laws (unless given)."""
-    kwargs.setdefault("friction_terms", friction_library(pend))
-    return DissipationDiscrepancy(pend.energy, position_names=pend.position_names, **kwargs)
+    return DissipationDiscrepancy.from_system(pend, **kwargs)
 
 
 def _synthetic_figures(rep, pend, model, q, q_val, t, energy_figure, fit_figure):
