@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+import sympy as sp
 from scipy.integrate import solve_ivp
 
 import discrepancy as dc
@@ -43,6 +44,11 @@ _x, _u = ca.SX.sym("x", 2), ca.SX.sym("u", 1)
 DOUBLE = ca.Function("f", [_x, _u], [ca.vertcat(_x[1], _u)])   # a double integrator
 PLAN = plan_trajectory(DOUBLE, x0=[0, 0], xf=[1, 0], T=1.0, n_intervals=10)
 DECAY = lambda x, u: -x  # noqa: E731  (x' = -x, for replays)
+# a unit spring from T and V (q'' = -q), and one driven by an input force u
+_q, _dq, _u_sym = sp.symbols("q dq u")
+SPRING = dc.systems.LagrangianSystem(_dq ** 2 / 2, _q ** 2 / 2, ["q"])
+DRIVEN = dc.systems.LagrangianSystem(_dq ** 2 / 2, _q ** 2 / 2, ["q"], forces=[_u_sym],
+                                     input_names=["u"])
 
 
 def plan(**kw):
@@ -79,6 +85,23 @@ CASES = [
     Case("energy", "predict before fit", lambda: dissipation().predict(Q, T, dq=DQ), raises(NotFittedError, r"fit\(q, t\)")),
     Case("energy", "state form without a library", lambda: dc.EnergyDiscrepancy(energy=H, optimizer=dc.STLSQ()).fit(Q, T, dq=DQ), raises(ParameterError, r"feature_library must be a feature library")),
     Case("energy", "viscous friction recovered", lambda: FITTED.identified_terms(), returns(lambda terms: len(terms) == 1 and terms[0]["name"] == "viscous joint 1" and abs(terms[0]["coefficient"] - 0.1) < 1e-4)),
+    Case("energy", "torque_limit negative", lambda: dissipation(torque_limit=-1.0).fit(Q, T, dq=DQ), raises(ParameterError, r"torque_limit must be")),
+    Case("energy", "torque_limit of text", lambda: dissipation(torque_limit="large").fit(Q, T, dq=DQ), raises(ParameterError, r"torque_limit must be")),
+    Case("energy", "torque_limit binds the fit", lambda: dissipation(torque_limit=0.01).fit(Q, T, dq=DQ), returns(lambda m: all(c * np.max(np.abs(DQ)) ** {"viscous joint 1": 1, "Coulomb joint 1": 0, "air drag dq1": 2, "Stribeck joint 1": 0}[n] <= 0.01 * (1 + 1e-9) for n, c in zip([t.name for t in m.terms_], m.coef_, strict=True)))),
+    Case("energy", "fit_window 0", lambda: dissipation(fit_window=0).fit(Q, T, dq=DQ), raises(ParameterError, r"fit_window must be")),
+    Case("energy", "fit_window longer than the record", lambda: dissipation(fit_window=1e6).fit(Q, T, dq=DQ).coef_, returns(lambda c: np.allclose(c, FITTED.coef_, rtol=1e-12))),
+    Case("energy", "blind_fit split past the data", lambda: dc.energy.blind_fit(dissipation(), Q, T, split=5000), raises(ParameterError, r"split must be a sample index in \[10, 2000\)")),
+    Case("energy", "blind_fit candidates of numbers", lambda: dc.energy.blind_fit({"a": 1}, Q, T, split=1600), raises(ParameterError, r"candidates must be a non-empty mapping")),
+    Case("energy", "blind_fit one origin", lambda: dc.energy.blind_fit(dissipation(), Q, T, split=1600, n_origins=1), raises(ParameterError, r"n_origins must be an integer >= 2")),
+    Case("energy", "blind_fit horizon longer than training", lambda: dc.energy.blind_fit(dissipation(), Q, T, split=1600, horizon=100.0), raises(ParameterError, r"horizon must be a length in \(0, 15.99\) s")),
+    Case("energy", "blind_fit horizon too long for origins", lambda: dc.energy.blind_fit(dissipation(), Q, T, split=1600, horizon=12.0), raises(DataError, r"too short to forecast 12 s")),
+    Case("energy", "system with an unknown symbol", lambda: dc.systems.LagrangianSystem(sp.Symbol("m") * sp.Symbol("dq") ** 2, sp.Symbol("q") ** 2, ["q"]), raises(ParameterError, r"kinetic uses \['m'\]")),
+    Case("energy", "system with too few rates", lambda: dc.systems.LagrangianSystem(sp.Symbol("dq") ** 2, sp.Symbol("q") ** 2, ["q", "p"], rates=["dq"]), raises(ParameterError, r"rates must name one rate per coordinate \(2\)")),
+    Case("energy", "system forces of the wrong count", lambda: dc.systems.LagrangianSystem(sp.Symbol("dq") ** 2, sp.Symbol("q") ** 2, ["q"], forces=[0, 0]), raises(ParameterError, r"forces must be a list of 1 expressions")),
+    Case("energy", "system state of the wrong width", lambda: SPRING.rhs(np.zeros((3, 3))), raises(ShapeError, r"x must be \(m, 2\) = \['q', 'dq'\]")),
+    Case("energy", "system input missing", lambda: DRIVEN.rhs(np.zeros((3, 2))), raises(ShapeError, r"u is required")),
+    Case("energy", "system equations of a spring", lambda: SPRING.rhs(np.array([[0.3, 0.2]])), returns(lambda f: np.allclose(f, [[0.2, -0.3]], rtol=1e-14))),
+    Case("energy", "from_system of a system without joints", lambda: dc.DissipationDiscrepancy.from_system(dc.systems.VanDerPol()), raises(ParameterError, r"system must have energy, position_names and joints\(\)")),
     # --- control
     Case("control", "model a number", lambda: as_casadi(3), raises(ParameterError, r"model must be a casadi.Function")),
     Case("control", "dynamics without inputs", lambda: as_casadi(ca.Function("f", [_x], [_x])), raises(ShapeError, r"dynamics must map \(x \(n,1\), u \(r,1\)\)")),

@@ -117,27 +117,36 @@ def seeds_figure(seeds, k1_error, k2_error, val_error, *, title: str = ""):
     return fig
 
 
-def forecast_figure(origins, errors, validation, *, bar: float | None = None, title: str = ""):
-    """Forecast error (% of each window's dH range) against forecast origin, one line per
-    procedure; the validation forecast (from the end of training) as a marker at its origin.
+def forecast_figure(table, *, marked=(), bar: float | None = None, title: str = ""):
+    """Each procedure's median forecast error from the origins inside training (x) against
+    its validation error (y), both in % of the window's dH range, one colour per library
+    (the text before the first comma of a procedure's name); ``marked`` procedures ringed.
 
     Args:
-        origins: ``(k,)`` origins inside the training part (s); ``errors``: dict procedure ->
-            ``(k,)`` errors; ``validation``: ``(origin, dict procedure -> error)``.
+        table: ``{procedure: {"forecast_median_percent_of_range": float,
+            "validation_continued_percent_of_range": float}}``.
     """
-    fig, ax = plt.subplots(figsize=(9, 4))
-    t_val, val = validation
-    for i, (name, err) in enumerate(errors.items()):
-        color = f"C{i}"
-        ax.plot(origins, err, "o-", color=color, lw=1, ms=4, label=name)
-        ax.plot([t_val], [val[name]], "*", color=color, ms=11)
+    fig, ax = plt.subplots(figsize=(7, 4.6))
+    libraries = list(dict.fromkeys(name.split(",")[0] for name in table))
+    for i, library in enumerate(libraries):
+        rows = [r for n, r in table.items() if n.split(",")[0] == library]
+        ax.plot([r["forecast_median_percent_of_range"] for r in rows],
+                [r["validation_continued_percent_of_range"] for r in rows], "o",
+                color=f"C{i}", ms=5, alpha=0.8, label=library)
+    for name, label in marked:
+        r = table[name]
+        ax.plot(r["forecast_median_percent_of_range"], r["validation_continued_percent_of_range"],
+                "o", ms=13, mfc="none", mec="k", mew=1.2)
+        ax.annotate(label, (r["forecast_median_percent_of_range"],
+                            r["validation_continued_percent_of_range"]),
+                    textcoords="offset points", xytext=(8, 6), fontsize=8)
     if bar is not None:
         ax.axhline(bar, color="k", ls=":", lw=1, label=f"{bar:g} % (target)")
-    ax.axvline(t_val, color="0.5", ls="--", lw=1)
+    ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("forecast origin (s): fit on [0, origin], forecast the next window")
-    ax.set_ylabel("max error (% of window's dH range)")
-    ax.legend(fontsize=7, loc="upper left")
+    ax.set_xlabel("median forecast error from origins inside training (% of range)")
+    ax.set_ylabel("validation error, continued (% of range)")
+    ax.legend(fontsize=8)
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
     return fig
