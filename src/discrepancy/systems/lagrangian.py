@@ -70,6 +70,8 @@ class LagrangianSystem(System):
         if len(dq) != len(q):
             raise ParameterError(f"rates must name one rate per coordinate ({len(q)}); got "
                                  f"{len(dq)}")
+        if isinstance(input_names, str):
+            raise ParameterError(f"input_names must be a list of names; got {input_names!r}")
         inputs = _names(list(input_names), "input_names") if len(input_names) else ()
         states = (*q, *dq)
         if len(set(states + inputs)) != len(states) + len(inputs):
