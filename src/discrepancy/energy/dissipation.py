@@ -75,7 +75,7 @@ def default_friction_library(velocity_names, *, joints=None, stribeck_speed: flo
         raise ParameterError(f"velocity_names must be a non-empty list of names; got "
                              f"{velocity_names!r}")
     speeds = [symbol(n) for n in velocity_names]
-    joints = _joints(joints, speeds)
+    joints = joint_speeds(joints, speeds)
     terms = [FrictionTerm(f"viscous {label}", w ** 2, "N m s", f"k ({w})", speed=w)
              for label, w in joints.items()]
     for label, w in joints.items():
@@ -101,7 +101,9 @@ def without_stribeck(terms) -> tuple[FrictionTerm, ...]:
     return tuple(term for term in terms if not term.name.startswith("Stribeck "))
 
 
-def _joints(joints, speeds) -> dict[str, sp.Expr]:
+def joint_speeds(joints, speeds) -> dict[str, sp.Expr]:
+    """``{label: relative speed}`` checked against the velocity symbols ``speeds`` (default:
+    each coordinate its own joint)."""
     if joints is None:
         return {f"joint {i + 1}": d for i, d in enumerate(speeds)}
     if not isinstance(joints, Mapping) or not joints:

@@ -155,15 +155,14 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
     """
     q = as_2d("q", q, allow_1d=True)
     t = as_times("t", t, len(q))
+    if not isinstance(split, (int, np.integer)) or not 10 <= split < len(q):
+        raise ParameterError(f"split must be a sample index in [10, {len(q)}); got {split!r}")
     if isinstance(candidates, DissipationDiscrepancy):
-        candidates = default_procedures(candidates, float(t[min(split, len(t) - 1)] - t[0]),
-                                        q.shape[1])
+        candidates = default_procedures(candidates, float(t[split] - t[0]), q.shape[1])
     if not isinstance(candidates, Mapping) or not candidates or not all(
             isinstance(c, DissipationDiscrepancy) for c in candidates.values()):
         raise ParameterError("candidates must be a non-empty mapping of names to "
                              f"DissipationDiscrepancy; got {candidates!r:.80}")
-    if not isinstance(split, (int, np.integer)) or not 10 <= split < len(q):
-        raise ParameterError(f"split must be a sample index in [10, {len(q)}); got {split!r}")
     if not isinstance(n_origins, (int, np.integer)) or n_origins < 2:
         raise ParameterError(f"n_origins must be an integer >= 2; got {n_origins!r}")
     if dq is not None:

@@ -95,10 +95,10 @@ class LagrangianSystem(System):
 
     def joints(self) -> dict:
         """``{label: relative speed}`` for :func:`~discrepancy.energy.default_friction_library`."""
-        from ..energy.dissipation import _joints
+        from ..energy.dissipation import joint_speeds
 
         k = len(self.position_names)
-        return _joints(self._joints, [symbol(n) for n in self.state_names[k:]])
+        return joint_speeds(self._joints, [symbol(n) for n in self.state_names[k:]])
 
     def _functions(self, friction: bool):
         if friction not in self._compiled:
@@ -114,62 +114,53 @@ class LagrangianSystem(System):
                                         [compile_numpy(e, names) for e in rest])
         return self._compiled[friction]
 
-    def _stack(self, x, u) -> np.ndarray:
+    def _states(self, x) -> np.ndarray:
         x = np.asarray(x, dtype=float)
         x = x[None, :] if x.ndim == 1 else x
         if x.ndim != 2 or x.shape[1] != len(self.state_names):
             raise ShapeError(f"x must be (m, {len(self.state_names)}) = "
                              f"{list(self.state_names)}; got shape {x.shape}")
-        if not self.input_names:
-            return x
-        if u is None:
-            raise ShapeError(f"u is required: (m, {len(self.input_names)}) = "
-                             f"{list(self.input_names)}")
-        u = np.broadcast_to(np.asarray(u, dtype=float).reshape(-1, len(self.input_names)),
-                            (len(x), len(self.input_names)))
-        return np.hstack([x, u])
+        return x
 
-    def _accelerations(self, x, u, friction: bool) -> np.ndarray:
-        z = self._stack(x, u)
+    def _dynamics(self, x, u, friction: bool) -> np.ndarray:
+        """``[q̇, q̈]`` with ``M(q) q̈ = b(q, q̇, u)`` solved per sample."""
+        x = self._states(x)
+        z, m, r = x, len(x), len(self.input_names)
+        if r:
+            if u is None:
+                raise ShapeError(f"u is required: (m, {r}) = {list(self.input_names)}")
+            z = np.hstack([x, np.broadcast_to(np.asarray(u, float).reshape(-1, r), (m, r))])
         mass, rest = self._functions(friction)
-        m = len(z)
         matrix = np.stack([np.stack([np.broadcast_to(f(z), (m,)) for f in row], axis=-1)
                            for row in mass], axis=-2)
         b = np.stack([np.broadcast_to(f(z), (m,)) for f in rest], axis=-1)
-        return np.linalg.solve(matrix, b[..., None])[..., 0]
+        acc = np.linalg.solve(matrix, b[..., None])[..., 0]
+        return np.hstack([x[:, len(self.position_names):], acc])
 
     def rhs(self, x, u=None) -> np.ndarray:
         """True dynamics ``[q̇, q̈]`` ``(m, 2k)`` (with the dissipation function)."""
-        x2 = self._stack(x, u)[:, :len(self.state_names)]
-        return np.hstack([x2[:, len(self.position_names):], self._accelerations(x, u, True)])
+        return self._dynamics(x, u, True)
 
     def flawed_model(self):
         """The conservative model (no dissipation function), ``f_m(x, u)``."""
-        def prior(x, u=None):
-            x2 = self._stack(x, u)[:, :len(self.state_names)]
-            return np.hstack([x2[:, len(self.position_names):],
-                              self._accelerations(x, u, False)])
-        return prior
+        return lambda x, u=None: self._dynamics(x, u, False)
+
+    def _evaluate(self, key: str, exprs, x) -> np.ndarray:
+        """The expressions ``exprs`` of the state, compiled once under ``key``, ``(m, len)``."""
+        if key not in self._compiled:
+            self._compiled[key] = [compile_numpy(e, self.state_names) for e in exprs]
+        x = self._states(x)
+        return np.column_stack([np.broadcast_to(f(x), (len(x),))
+                                for f in self._compiled[key]])
 
     def energy(self, x) -> np.ndarray:
         """``H_m = T + V`` (J), ``(m,)``."""
-        if "energy" not in self._compiled:
-            self._compiled["energy"] = compile_numpy(self.kinetic + self.potential,
-                                                     self.state_names)
-        x = self._stack(x, np.zeros(len(self.input_names)) if self.input_names else None)
-        return np.broadcast_to(self._compiled["energy"](x[:, :len(self.state_names)]),
-                               (len(x),)).copy()
+        return self._evaluate("energy", [self.kinetic + self.potential], x)[:, 0]
 
     def conservative_torques(self, x) -> np.ndarray:
         """``-∂V/∂q`` (N m or N) per coordinate, ``(m, k)``: the gravity and spring torques."""
-        if "torques" not in self._compiled:
-            q = [symbol(n) for n in self.position_names]
-            self._compiled["torques"] = [compile_numpy(-sp.diff(self.potential, s),
-                                                       self.state_names) for s in q]
-        x = self._stack(x, np.zeros(len(self.input_names)) if self.input_names else None)
-        x = x[:, :len(self.state_names)]
-        return np.column_stack([np.broadcast_to(f(x), (len(x),))
-                                for f in self._compiled["torques"]])
+        return self._evaluate("torques", [-sp.diff(self.potential, symbol(n))
+                                          for n in self.position_names], x)
 
     def simulate(self, x0, t, *, u=None, rtol: float = 1e-10, atol: float = 1e-10) -> np.ndarray:
         """Integrate the true system from ``x0`` ``(2k,)``; states at times ``t``, ``(m, 2k)``.

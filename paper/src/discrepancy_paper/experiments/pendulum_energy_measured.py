@@ -75,7 +75,7 @@ def _without_mount(blind: BlindFit) -> BlindFit:
 
 def _fit_start(model, t) -> int:
     """Index of the first sample the model was fitted on (0 unless it has a fit window)."""
-    return int(np.searchsorted(t, model.fit_start_ - 1e-9))
+    return int(np.argmin(np.abs(t - model.fit_start_)))   # as model.anchored places it
 
 
 def _continued(model, x, t, split):
@@ -294,8 +294,7 @@ def _sensitivity_row(smoothing, model, errors) -> dict:
 def _smoothing_sensitivity(pend, chosen, rec) -> list[dict]:
     """The chosen procedure refitted after the other Savitzky-Golay windows: law and errors."""
     kwargs = {k: v for k, v in chosen.get_params(deep=False).items()
-              if k in ("friction_terms", "max_terms", "holdout", "tolerance", "block_seconds",
-                       "torque_limit")}
+              if k not in ("energy", "differentiation_method", "position_names")}
     rows = []
     for smoothing in OTHER_SMOOTHINGS:
         x, t = dissipation_model(pend, differentiation_method=_smoother(smoothing)).states(
