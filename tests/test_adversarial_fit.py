@@ -196,7 +196,7 @@ CASES = [
     Case("model", "constraints only a string", lambda: dc.Constraints(only="x1"), raises(ParameterError, r"Constraints.only must be None or a mapping")),
     Case("model", "constraints equal a number", lambda: dc.Constraints(equal=3), raises(ParameterError, r"Constraints.equal must be a list")),
     Case("model", "Savitzky-Golay window None", lambda: fit(differentiation_method=dc.SavitzkyGolay(window_length=None)), raises(ParameterError, r"SavitzkyGolay: window_length must be an odd integer >= 3 or a list.*got None")),
-    Case("model", "Kalman too smooth to solve", lambda: dc.Kalman(alpha=1e12)(*circle(400)[1::-1]), raises(ConvergenceError, r"Kalman\(alpha=1000000000000.0\) failed on these data \(LinAlgError")),
+    Case("model", "Kalman too smooth to solve", lambda: dc.Kalman(alpha=1e12)(*circle(400)[1::-1]), raises(ConvergenceError, r"Kalman\(alpha=1000000000000.0\) failed on these data")),
     Case("model", "trend filter of 10**12 iterations", lambda: fit(differentiation_method=dc.TrendFiltered(max_iter=10**12)), raises(ConvergenceError, r"TrendFiltered.* failed on these data \(OverflowError")),
     Case("model", "Dequantised encoders of text", lambda: fit(differentiation_method=dc.Dequantised(resolution=1e-6, encoders="x")), raises(ShapeError, r"encoders must be a numeric array")),
     Case("model", "discrete_time a word", lambda: fit(discrete_time="yes"), raises(ParameterError, r"discrete_time must be")),

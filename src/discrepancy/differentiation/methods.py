@@ -192,4 +192,20 @@ class Kalman(_DerivativePackage):
             raise ParameterError(f"Kalman smoothing of {len(t)} samples would need a dense "
                                  f"{2 * len(t)}-square solve; split the trajectory into pieces "
                                  f"of at most {self.max_samples} samples or use SavitzkyGolay")
-        return super()._compute(x, t)
+        x_smooth, x_dot = super()._compute(x, t)
+        self._check_no_worse_than_a_line(x, t)
+        return x_smooth, x_dot
+
+    def _check_no_worse_than_a_line(self, x, t):
+        """The smoother's limit (alpha -> inf) is the least-squares line; a fit worse than
+        that line means the package's dense solve lost its accuracy (it then returns
+        derivatives near 0 on some machines and raises on others)."""
+        smooth = np.asarray(self._method().x(x, t, axis=0), float)
+        basis = np.c_[np.ones_like(t), t - t.mean()]
+        line = basis @ np.linalg.lstsq(basis, x, rcond=None)[0]
+        worse = np.sum((x - smooth) ** 2, axis=0) > 1.001 * np.sum((x - line) ** 2, axis=0) \
+            + 1e-12 * np.sum(x ** 2, axis=0)
+        if np.any(worse) or not np.all(np.isfinite(smooth)):
+            raise ConvergenceError(f"{self!r} failed on these data (its smoothed states fit "
+                                   "worse than a straight line: the solve is ill-conditioned "
+                                   "at this alpha); try a smaller alpha or another method")
