@@ -25,9 +25,11 @@ class Chunk:
     """Consecutive rows of one trajectory (see the module docstring).
 
     Attributes:
-        x: states ``(k, n)``; t: times ``(k,)`` or ``None``; u: inputs ``(k, r)`` or
-        ``None``; x_dot: measured derivatives ``(k, n)`` or ``None``; weight: the rows'
-        weights in the regression ``(k,)`` or ``None``;
+        x: states ``(k, n)``.
+        t: times ``(k,)`` or ``None``.
+        u: inputs ``(k, r)`` or ``None``.
+        x_dot: measured derivatives ``(k, n)`` or ``None``.
+        weight: the rows' weights in the regression ``(k,)`` or ``None``.
         where: description used in error messages (e.g. ``"run3.h5 rows 0..65535"``).
     """
 

@@ -56,10 +56,12 @@ def load(path, *, states=None, inputs=None, time: str | None = "t") -> LoadedDat
         time: name of the time column/variable (``None``: no times in the file).
 
     Raises:
-        MissingFileError (a FileNotFoundError), UnknownNameError (unknown suffix or
-        variable, listing what the file has), DataError (a folder, a corrupt file,
-        non-numeric or non-finite values, bad times), ResourceError (an array too large
-        to read whole; only the arrays asked for are read).
+        MissingFileError: (a ``FileNotFoundError``) no such file.
+        UnknownNameError: an unknown suffix or variable (the message lists what the file
+            has).
+        DataError: a folder, a corrupt file, non-numeric or non-finite values, bad times.
+        ResourceError: an array too large to read whole (only the arrays asked for are
+            read).
     """
     validate_params("io.load", {"states": states, "inputs": inputs, "time": time},
                     {"states": NAMES, "inputs": NAMES, "time": [None, NAME]})

@@ -20,7 +20,7 @@ from ..registry import Registry
 class Differentiator(Estimator, ABC):
     """Estimate time derivatives of sampled trajectories.
 
-    Subclasses implement :meth:`_compute` and set ``uniform_only``.
+    Subclasses implement ``_compute(x, t)`` and set ``uniform_only``.
     ``halo`` is the number of neighbouring samples on each side a derivative
     depends on (used to stitch chunks exactly); ``None`` means global methods.
     """

@@ -457,7 +457,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
 
 
 def load_model(path, prior=None, *, functions=None) -> DiscrepancyModel:
-    """Load a model saved with :meth:`DiscrepancyModel.save` (see :meth:`~DiscrepancyModel.
-    from_state` for ``prior`` and ``functions``)."""
+    """Load a model saved with :meth:`DiscrepancyModel.save` (see
+    :meth:`~DiscrepancyModel.from_state` for ``prior`` and ``functions``)."""
     from .model_file import read_json
     return DiscrepancyModel.from_state(read_json(path), prior=prior, functions=functions)

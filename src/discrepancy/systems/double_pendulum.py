@@ -31,10 +31,12 @@ class DoublePendulumParameters:
     """Physical parameters; defaults are the paper's Table 1 (SI units).
 
     Attributes:
-        m1, m2: arm masses (kg). a1, a2: pivot-to-centre-of-mass distances (m).
-        l1: length of the first arm, pivot to pivot (m). I1, I2: inertias about the
-        centres of mass (kg m^2). k1, k2: viscous friction of joint 1 and joint 2
-        (N m s / rad). g: gravity (m/s^2).
+        m1, m2: arm masses (kg).
+        a1, a2: pivot-to-centre-of-mass distances (m).
+        l1: length of the first arm, pivot to pivot (m).
+        I1, I2: inertias about the centres of mass (kg m^2).
+        k1, k2: viscous friction of joint 1 and joint 2 (N m s / rad).
+        g: gravity (m/s^2).
     """
 
     m1: float = PAPER_TABLE_1["m1"]
