@@ -14,8 +14,9 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE / "_ext"))
 
-import discrepancy  # noqa: E402
 from sphinx.ext.napoleon.docstring import GoogleDocstring  # noqa: E402
+
+import discrepancy  # noqa: E402
 
 project = "discrepancy"
 author = "the discrepancy developers"
@@ -53,8 +54,9 @@ napoleon_google_docstring = True      # the docstrings use Google style ("Args:"
 napoleon_numpy_docstring = False
 napoleon_use_rtype = False
 napoleon_attr_annotations = True
-napoleon_use_ivar = True          # "Attributes:" as fields: a dataclass field is not documented twice
+napoleon_use_ivar = True          # "Attributes:" as fields: no second entry for a dataclass field
 add_module_names = False
+toc_object_entries_show_parents = "hide"
 python_maximum_signature_line_length = 88
 
 # Broken references fail the build. Objects of other projects cannot be linked offline

@@ -22,9 +22,10 @@ def van_der_pol(alpha):
     return lambda t, x: [x[1], alpha * (1 - x[0] ** 2) * x[1] - x[0]]
 
 
-# Measurements of the real system (α = 0.5), 25 time units sampled every 0.01
+# Measurements of the real system (α = 0.5) from x0 = (0.5, 0), 25 time units sampled
+# every 0.01, as in the paper
 t = np.arange(0, 25, 0.01)
-x = solve_ivp(van_der_pol(0.5), (0, 25), [2.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-10).y.T
+x = solve_ivp(van_der_pol(0.5), (0, 25), [0.5, 0.0], t_eval=t, rtol=1e-10, atol=1e-10).y.T
 
 
 def f_m(x, u=None):
@@ -82,4 +83,4 @@ fig.tight_layout()
 model.save("first_model.json")
 again = dc.load_model("first_model.json", prior=f_m)
 assert np.allclose(again.coefficients(), model.coefficients())
-print(again.to_latex()[1])
+print(again.to_latex())

@@ -79,8 +79,8 @@ def exported_names(module) -> list[str]:
 def attribute_docs(module_name: str) -> dict[str, str]:
     """``{name: text}`` of the module-level ``#:`` comments (and docstrings after
     assignments) of a module, as autodoc reads them."""
-    from sphinx.pycode import ModuleAnalyzer
     from sphinx.errors import PycodeError
+    from sphinx.pycode import ModuleAnalyzer
 
     try:
         docs = ModuleAnalyzer.for_module(module_name).find_attr_docs()

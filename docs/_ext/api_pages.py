@@ -15,12 +15,13 @@ a broken link, which ``nitpicky`` with ``-W`` turns into a failed build.
 """
 from __future__ import annotations
 
-import importlib
+import inspect
 import re
 import sys
 from pathlib import Path
 
 from api_catalogue import Catalogue, attribute_docs, documented_name, locate
+from sphinx import addnodes
 
 OUT = "api"
 GENERATED = "generated"
@@ -51,8 +52,8 @@ def _object_page(entry, catalogue) -> str:
 
 def _data_block(entry) -> list[str]:
     doc, value = data_docstring(entry), repr(entry.obj)
-    shown = [f"   :value: {value}"] if isinstance(entry.obj, (int, float, str, tuple,
-                                                               type(None))) and len(value) < 80 else []
+    simple = isinstance(entry.obj, (int, float, str, tuple, type(None)))
+    shown = [f"   :value: {value}"] if simple and len(value) < 80 else []
     return [f".. py:data:: {entry.name}", *shown, "",
             *["   " + line for line in doc.splitlines()], ""]
 
@@ -110,13 +111,18 @@ def _module_page(module_name, catalogue) -> tuple[str, list]:
             else:
                 lines += [f".. {DIRECTIVES[kind]}:: {e.name}", "   :members:",
                           "   :show-inheritance:", ""]
-    elsewhere = sorted({e.home for name, e in catalogue.exported_entries(module_name)
-                        if e.module != module_name and e.kind != "module"})
+    elsewhere = {e.home: e for name, e in catalogue.exported_entries(module_name)
+                 if e.module != module_name and e.kind != "module"}
     if elsewhere:
+        objects = sorted(h for h, e in elsewhere.items() if e.kind != "data")
+        data = sorted(h for h, e in elsewhere.items() if e.kind == "data")
         lines += [*_title("Also available here", "-"),
                   f"Exported by ``{module_name}``, documented where users import them from:",
-                  "", ".. autosummary::", "   :nosignatures:", "",
-                  *[f"   {_relative(home, module_name)}" for home in elsewhere], ""]
+                  ""]
+        if objects:        # autosummary would show a constant's type's docstring: not here
+            lines += [".. autosummary::", "   :nosignatures:", "",
+                      *[f"   {_relative(home, module_name)}" for home in objects], ""]
+        lines += [f"* :data:`{home}`" for home in data] + [""]
     return "\n".join(lines), pages
 
 
@@ -189,6 +195,36 @@ def _candidates(target, module, cls):
             yield ".".join(parts[:i]) + "." + stripped
 
 
+def canonical_name(path: str) -> str | None:
+    """The defining path of a documented object (``discrepancy.models.discrepancy_model.
+    DiscrepancyModel.fit`` for ``discrepancy.DiscrepancyModel.fit``)."""
+    found = locate(path)
+    if found is None:
+        return None
+    owner, attribute, obj = found
+    if inspect.isclass(owner):
+        base = canonical_name(path.rsplit(".", 1)[0])
+        return None if base is None else f"{base}.{attribute}"
+    if inspect.isclass(obj) or inspect.isfunction(obj):
+        return f"{obj.__module__}.{obj.__qualname__}"
+    return None
+
+
+def canonical_anchors(app, doctree) -> None:
+    """Give every signature the anchor of its defining path as well: the source pages
+    (viewcode) link to ``page.html#<defining path>``."""
+    taken = {i for node in doctree.findall() if hasattr(node, "get")
+             for i in node.get("ids", ())}
+    for sig in doctree.findall(addnodes.desc_signature):
+        module, fullname = sig.get("module"), sig.get("fullname")
+        if not (module and fullname and sig["ids"]):
+            continue
+        canonical = canonical_name(f"{module}.{fullname}")
+        if canonical and canonical not in taken:
+            sig["ids"].append(canonical)
+            taken.add(canonical)
+
+
 FIELD_WITH_NAMES = re.compile(r"^(\s*:(?:param|ivar|var|cvar|keyword|type|vartype) )"
                               r"([A-Za-z_][\w]*(?:, [A-Za-z_][\w]*)+):")
 
@@ -218,6 +254,7 @@ def setup(app):
     app.add_config_value("api_foreign_aliases", (), "env")
     app.connect("builder-inited", write_pages)
     app.connect("missing-reference", resolve_any_path)
+    app.connect("doctree-read", canonical_anchors)
     app.connect("warn-missing-reference", foreign_reference)
     app.connect("autodoc-process-docstring", join_field_names, priority=600)  # after napoleon
     return {"parallel_read_safe": True, "parallel_write_safe": True}

@@ -2,8 +2,8 @@
 differentiators): scikit-learn's contract, written small.
 
 * ``__init__`` stores its keyword arguments unchanged and validates nothing;
-* :meth:`Estimator.get_params` / :meth:`Estimator.set_params` see exactly the constructor's arguments (nested
-  ones as ``library__degree``), so ``sklearn.base.clone`` and grid searches work;
+* :meth:`Estimator.get_params` / :meth:`Estimator.set_params` see exactly the constructor's
+  arguments (nested ones as ``library__degree``), so ``sklearn.base.clone`` and grid searches work;
 * ``repr`` shows the arguments that differ from their defaults;
 * ``_validate_params()`` checks them against the class's ``_parameter_constraints``
   (see :mod:`discrepancy.constraints`) when they are used (``fit``, a call);

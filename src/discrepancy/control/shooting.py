@@ -33,10 +33,12 @@ class Problem:
 
     @property
     def dt(self) -> float:
+        """The hold interval (s)."""
         return float(self.t[1] - self.t[0])
 
     @property
     def n_intervals(self) -> int:
+        """Number of hold intervals."""
         return len(self.t) - 1
 
 

@@ -42,9 +42,11 @@ class Chunk:
 
     @property
     def n_rows(self) -> int:
+        """Number of rows ``k``."""
         return self.x.shape[0]
 
     def rows(self, start: int, stop: int | None = None) -> Chunk:
+        """Rows ``start:stop`` of every field, as a new chunk."""
         cut = slice(start, stop)
         return replace(self, **{f: None if getattr(self, f) is None else getattr(self, f)[cut]
                                 for f in FIELDS})
@@ -72,6 +74,8 @@ class IterableSource(ChunkSource):
 
 
 def as_source(x) -> ChunkSource:
+    """Chunked data as a :class:`ChunkSource`: a source as it is, an iterator of chunks as one
+    trajectory, a list of sources or of iterators as several."""
     if isinstance(x, ChunkSource):
         return x
     if isinstance(x, Iterator):

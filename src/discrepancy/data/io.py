@@ -23,6 +23,7 @@ NAMES = [None, NAME, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v)
     isinstance(n, str) for n in v), "a non-empty list of names")]
 #: memory of reading a CSV file whole, per character of it (Python lists of floats)
 CSV_BYTES_PER_CHARACTER = 8
+#: file suffixes :func:`load` reads, and the format each means
 SUFFIXES = {".csv": "csv", ".txt": "csv", ".npz": "npz", ".mat": "mat", ".h5": "hdf5",
             ".hdf5": "hdf5", ".hdf": "hdf5"}
 
@@ -32,8 +33,10 @@ class LoadedData:
     """Arrays read from a file.
 
     Attributes:
-        x: states ``(m, n)``; t: times ``(m,)`` or ``None`` (give a step to ``fit``);
-        u: inputs ``(m, r)`` or ``None``; state_names, input_names: column names.
+        x: states ``(m, n)``.
+        t: times ``(m,)`` or ``None`` (then give a step to ``fit``).
+        u: inputs ``(m, r)`` or ``None``.
+        state_names, input_names: column names.
     """
 
     x: np.ndarray

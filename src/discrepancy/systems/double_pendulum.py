@@ -75,6 +75,7 @@ class DoublePendulumParameters:
         return cls.from_array(contents[variable])
 
     def as_dict(self) -> dict[str, float]:
+        """``{name: value}`` in the order of the model's parameter vector."""
         return dict(zip(PARAMETER_ORDER, astuple(self), strict=True))
 
 
@@ -142,6 +143,7 @@ class DoublePendulum(System):
 
     @property
     def parameters(self) -> DoublePendulumParameters:
+        """The parameters in use: ``params``, or the paper's Table 1."""
         p = self.params if self.params is not None else DoublePendulumParameters()
         if not isinstance(p, DoublePendulumParameters):
             raise ParameterError(f"params must be DoublePendulumParameters; got {type(p).__name__}")
@@ -252,6 +254,7 @@ class DoublePendulum(System):
 
     @property
     def position_names(self) -> tuple[str, ...]:
+        """Names of the two angles (the first half of the state)."""
         return STATE_NAMES[:2]
 
     def joints(self) -> dict:
