@@ -54,13 +54,13 @@ fig = uncertainty_figure(unc, truth=truth)
 # %%
 # A forecast band
 # ---------------
-# Simulate the hybrid model from a state it was not fitted on, with 100 of the resampled
+# Simulate the hybrid model from a state it was not fitted on, with 50 of the resampled
 # models. The band holds the coefficients' uncertainty (not the measurement noise): how much
 # the forecast could differ had the experiment been repeated.
 
 x0, t_new = [-0.2, -0.3], np.arange(0, 25, 0.01)
 forecast = model.simulate(x0, t_new)
-band_low, band_high = model.simulate_interval(x0, t_new, uncertainty=unc, n_draws=100)
+band_low, band_high = model.simulate_interval(x0, t_new, uncertainty=unc, n_draws=50)
 real = solve_ivp(van_der_pol, (0, 25), x0, t_eval=t_new, rtol=1e-10, atol=1e-10).y.T
 
 inside = np.mean((real[:, 0] >= band_low[:, 0]) & (real[:, 0] <= band_high[:, 0]))
