@@ -16,6 +16,7 @@ import tracemalloc
 from pathlib import Path
 
 import h5py
+import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
@@ -73,6 +74,12 @@ streamed.print(precision=3)
 print(f"peak memory of the streamed fit: {peak_one / 2**20:.1f} MiB for one file, "
       f"{peak_all / 2**20:.1f} MiB for all four ({data_bytes / 2**20:.1f} MiB of data)")
 assert peak_all < 1.25 * peak_one and peak_all < data_bytes / 2
+
+fig, ax = plt.subplots(figsize=(6, 2.8))
+labels = ["data on disk\n(4 files)", "streamed fit,\n1 file", "streamed fit,\n4 files"]
+ax.bar(labels, np.array([data_bytes, peak_one, peak_all]) / 2**20, color=["0.6", "C0", "C0"])
+ax.set(ylabel="MiB", title="peak memory of a streamed fit (tracemalloc)")
+fig.tight_layout()
 
 coef = dict(zip(streamed.get_feature_names(), streamed.coefficients()[1]))
 assert abs(coef["x1"] - 8) < 0.05 and sum(c != 0 for c in coef.values()) == 1
