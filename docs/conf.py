@@ -93,7 +93,6 @@ sphinx_gallery_conf = {
     "filename_pattern": r"\.py$",             # every example runs at every build
     "within_subsection_order": "FileNameSortKey",
     "doc_module": ("discrepancy",),
-    "reference_url": {"discrepancy": None},   # links from example code to the API pages
     "backreferences_dir": "api/backreferences",
     "image_scrapers": ("matplotlib",),
     "min_reported_time": 0,

@@ -22,48 +22,41 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import discrepancy as dc
-from discrepancy.control import (
-    MPC,
-    DiscrepancyUpdater,
-    Limits,
-    as_casadi,
-    closed_loop,
-    plan_trajectory,
-    swing_up_errors,
-    tvlqr,
-)
+from discrepancy import control
 
 system = dc.systems.PendulumOnCart(dc.systems.PendulumOnCartParameters(k=0.01))
 names = system.state_names                               # phi (rad), s (m), dphi, ds
-limits = Limits.named(names, ["u"], states={"s": 0.2}, inputs={"u": 15.0}, rates={"u": 500.0})
+limits = control.Limits.named(names, ["u"], states={"s": 0.2}, inputs={"u": 15.0},
+                              rates={"u": 500.0})
 noise = [1e-3, 5e-4, 2e-2, 5e-3]                         # sensor noise std per state
 x_hang, x_up = np.array([np.pi, 0.0, 0.0, 0.0]), np.zeros(4)
 Q, R = (10.0, 20.0, 1.0, 0.1), 1.0
-plant = as_casadi(system.equations())                    # the real system
+plant = control.as_casadi(system.equations())            # the real system
 flawed = system.flawed_equations()                       # our model: (states, inputs, rhs)
 
 
 def plan(model):
-    return plan_trajectory(model, x0=x_hang, xf=x_up, T=1.5, n_intervals=75, substeps=4,
-                           Q=Q, R=R, limits=limits, verbose=False)
+    return control.plan_trajectory(model, x0=x_hang, xf=x_up, T=1.5, n_intervals=75,
+                                   substeps=4, Q=Q, R=R, limits=limits, verbose=False)
 
 
 def run(law, seed):
     """1.5 s of swing-up and 1 s of balancing on the real system, with noise."""
-    return closed_loop(plant, law, x_hang, dt=0.02, steps=125, limits=limits,
-                       noise_std=noise, seed=seed, samples=40)
+    return control.closed_loop(plant, law, x_hang, dt=0.02, steps=125, limits=limits,
+                               noise_std=noise, seed=seed, samples=40)
 
 
 def success(result):
-    upright = swing_up_errors(result.final, angles=(0,), rates=(2,))["success"]
+    upright = control.swing_up_errors(result.final, angles=(0,), rates=(2,))["success"]
     return upright and limits.check(result)["respected"]
 
 
 # %%
 # The first attempt: plan on our model, track with TVLQR
 # -------------------------------------------------------
-plan_flawed = plan(as_casadi(flawed))
-first = run(tvlqr(as_casadi(flawed), plan_flawed, Q=Q, R=R, Q_final="lqr"), seed=1)
+f_flawed = control.as_casadi(flawed)
+plan_flawed = plan(f_flawed)
+first = run(control.tvlqr(f_flawed, plan_flawed, Q=Q, R=R, Q_final="lqr"), seed=1)
 print("first attempt succeeds:", success(first))
 assert not success(first)
 
@@ -76,7 +69,7 @@ assert not success(first)
 trig = dc.FourierLibrary(1, variables=["phi"])
 u_lin = dc.PolynomialLibrary(1, include_bias=False, variables=["u"])
 library = dc.PolynomialLibrary(1, variables=list(names)) + trig + u_lin + trig * u_lin
-updater = DiscrepancyUpdater(dc.DiscrepancyModel(
+updater = control.DiscrepancyUpdater(dc.DiscrepancyModel(
     prior=list(flawed[2]), feature_library=library, state_names=list(names),
     input_names=["u"],
     differentiation_method=dc.SavitzkyGolay(window_length=41, polyorder=2, smooth=False)))
@@ -104,9 +97,10 @@ f_hybrid = hybrid.to_casadi()
 plan_hybrid = plan(f_hybrid)
 xb = np.array(limits.x_bounds, dtype=float)
 xb[names.index("s")] += [0.01, -0.01]
-mpc = MPC(f_hybrid, dt=0.02, horizon=20, substeps=1, max_iter=5, Q=Q, R=R,
-          limits=replace(limits, x_bounds=xb))
-law = mpc.follow(plan_hybrid, tracker=tvlqr(f_hybrid, plan_hybrid, Q=Q, R=R, Q_final="lqr"))
+mpc = control.MPC(f_hybrid, dt=0.02, horizon=20, substeps=1, max_iter=5, Q=Q, R=R,
+                  limits=replace(limits, x_bounds=xb))
+tracker = control.tvlqr(f_hybrid, plan_hybrid, Q=Q, R=R, Q_final="lqr")
+law = mpc.follow(plan_hybrid, tracker=tracker)
 second = run(law, seed=2)
 print("MPC on the hybrid model succeeds:", success(second), "| largest |s|:",
       f"{np.max(np.abs(second.x_dense[..., 1])):.3f} m")

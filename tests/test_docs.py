@@ -1,11 +1,9 @@
 """The documentation's machinery: which pages the API reference must have (docs/_ext), and the
 README draft's quick start run as printed on Van der Pol data with noise."""
 import re
-import runpy
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 import discrepancy as dc
@@ -58,17 +56,12 @@ def test_public_modules_and_names_follow_the_underscore_rule(catalogue):
     assert "TOLERANCE" in resolution and "ROWS" not in resolution
 
 
-def test_readme_draft_quick_start_runs_and_finds_the_discrepancy(tmp_path, monkeypatch, capsys,
-                                                                  vdp_data):
+def test_readme_draft_quick_start_runs_and_finds_the_discrepancy(tmp_path, capsys,
+                                                                  run_quick_start):
     text = (ROOT / "docs" / "README-draft.md").read_text()
     code = re.search(r"## Quick start\n\n```python\n(.*?)```", text, re.S).group(1)
     assert len(code.strip().splitlines()) <= 15
-    x = vdp_data.x + 0.01 * np.random.default_rng(0).standard_normal(vdp_data.x.shape)
-    np.savetxt(tmp_path / "run.csv", np.c_[vdp_data.t, x], delimiter=",", header="t,x1,x2",
-               comments="")
-    (tmp_path / "quick_start.py").write_text(code)
-    monkeypatch.chdir(tmp_path)
-    namespace = runpy.run_path(str(tmp_path / "quick_start.py"))
+    namespace = run_quick_start(text)
     printed = capsys.readouterr().out
     assert "(x2)' = prior + 0.40" in printed and "(x2)' = prior + (0.40" in printed
     assert (tmp_path / "model.json").is_file()
