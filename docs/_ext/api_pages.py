@@ -86,11 +86,6 @@ def _module_page(module_name, catalogue) -> tuple[str, list]:
     lines = [*_title(module_name), f".. automodule:: {module_name}", "   :no-members:", "",
              f".. currentmodule:: {module_name}", ""]
     pages = []
-    subs = catalogue.submodules[module_name]
-    if subs:
-        lines += [*_title("Submodules", "-"), ".. autosummary::", "",
-                  *[f"   {_relative(s, module_name)}" for s in subs], "", ".. toctree::",
-                  "   :hidden:", "", *[f"   {s}" for s in subs], ""]
     homed = catalogue.homed_in(module_name)
     for kind in ("class", "exception", "function", "data"):
         entries = [e for e in homed if e.kind == kind]
@@ -123,6 +118,11 @@ def _module_page(module_name, catalogue) -> tuple[str, list]:
             lines += [".. autosummary::", "   :nosignatures:", "",
                       *[f"   {_relative(home, module_name)}" for home in objects], ""]
         lines += [f"* :data:`{home}`" for home in data] + [""]
+    subs = catalogue.submodules[module_name]        # last: what users call comes first
+    if subs:
+        lines += [*_title("Submodules", "-"), ".. autosummary::", "",
+                  *[f"   {_relative(s, module_name)}" for s in subs], "", ".. toctree::",
+                  "   :hidden:", "", *[f"   {s}" for s in subs], ""]
     return "\n".join(lines), pages
 
 
