@@ -1,15 +1,15 @@
-# Two commands: `make demo` and `make test`. Each creates .venv on first use.
+# Two commands: `make demo` and `make test` (and `make docs`). Each creates .venv on first use.
 PYTHON ?= python3.11
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test docs lint bench clean
 
 $(STAMP): pyproject.toml paper/pyproject.toml constraints.txt
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV) || python3 -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[test,paper]' -e ./paper
+	$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[test,paper,docs]' -e ./paper
 	@touch $(STAMP)
 
 demo: $(STAMP)
@@ -18,11 +18,17 @@ demo: $(STAMP)
 test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
+# The site in docs/_build/html: API pages from the docstrings, the gallery (examples/) run,
+# warnings are errors; then every public name and internal link is checked.
+docs: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/sphinx-build -W --keep-going -b html docs docs/_build/html
+	$(BIN)/python docs/check_api.py docs/_build/html
+
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks paper
+	$(BIN)/ruff check src tests benchmarks paper docs examples
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run_all.py
 
 clean:
-	rm -rf $(VENV) out
+	rm -rf $(VENV) out docs/_build docs/api docs/auto_examples

@@ -93,3 +93,21 @@ def rng() -> np.random.Generator:
 def helpers():
     """Plain functions for tests (integrate, vdp_rhs, lorenz_rhs)."""
     return SimpleNamespace(integrate=integrate, vdp_rhs=vdp_rhs, lorenz_rhs=lorenz_rhs)
+
+
+@pytest.fixture
+def run_quick_start(tmp_path, monkeypatch, vdp_data):
+    """``run(markdown_text) -> namespace``: the text's "## Quick start" Python block run in
+    ``tmp_path``, where ``run.csv`` holds the paper's Van der Pol data with noise 0.01."""
+    import re
+    import runpy
+
+    def run(text: str) -> dict:
+        code = re.search(r"## Quick start\n\n```python\n(.*?)```", text, re.S).group(1)
+        x = vdp_data.x + 0.01 * np.random.default_rng(0).standard_normal(vdp_data.x.shape)
+        np.savetxt(tmp_path / "run.csv", np.c_[vdp_data.t, x], delimiter=",",
+                   header="t,x1,x2", comments="")
+        (tmp_path / "quick_start.py").write_text(code)
+        monkeypatch.chdir(tmp_path)
+        return runpy.run_path(str(tmp_path / "quick_start.py"))
+    return run

@@ -31,7 +31,9 @@ import numpy as np
 from .errors import FeatureError
 from .optimizers.gram import GramStatistics
 
+#: rows of Θ formed at a time (counted from the start of a trajectory)
 BLOCK_ROWS = 4096
+#: running sums the blocks are dealt to, in turn (summed in this order at the end)
 LANES = 4
 #: threads only pay off for calls with several blocks each (measured on 3-block trajectories)
 MIN_BLOCKS_PER_THREAD = 8
@@ -172,7 +174,7 @@ class BlockAccumulator:
                 raise not_finite(buffer[:, :k], zb, first + s, p, self.names)
 
     def finish_trajectory(self) -> None:
-        """Add the lanes of the current trajectory to :attr:`total`, in lane order."""
+        """Add the lanes of the current trajectory to ``total``, in lane order."""
         for lane in self._lanes:
             if lane.folds is not None:
                 lane._sum_folds()

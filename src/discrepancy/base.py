@@ -2,12 +2,12 @@
 differentiators): scikit-learn's contract, written small.
 
 * ``__init__`` stores its keyword arguments unchanged and validates nothing;
-* :meth:`get_params` / :meth:`set_params` see exactly the constructor's arguments (nested
-  ones as ``library__degree``), so ``sklearn.base.clone`` and grid searches work;
+* :meth:`Estimator.get_params` / :meth:`Estimator.set_params` see exactly the constructor's
+  arguments (nested ones as ``library__degree``), so ``sklearn.base.clone`` and grid searches work;
 * ``repr`` shows the arguments that differ from their defaults;
-* :meth:`_validate_params` checks them against the class's ``_parameter_constraints``
+* ``_validate_params()`` checks them against the class's ``_parameter_constraints``
   (see :mod:`discrepancy.constraints`) when they are used (``fit``, a call);
-* :meth:`check_is_fitted` raises one :class:`~discrepancy.errors.NotFittedError`.
+* :meth:`Estimator.check_is_fitted` raises one :class:`~discrepancy.errors.NotFittedError`.
 """
 from __future__ import annotations
 

@@ -110,6 +110,7 @@ def _no_paper_package(args) -> int:
 
 
 def cmd_fit(args) -> None:
+    """``discrepancy fit``: load a data file, fit a model and save it as JSON."""
     from . import DiscrepancyModel
     from .errors import ParameterError
     from .io import load
@@ -147,6 +148,8 @@ def _stored(path):
 
 
 def cmd_simulate(args) -> None:
+    """``discrepancy simulate``: simulate a saved model from ``--x0`` (with recorded ``--inputs``)
+    and print or write the trajectory."""
     from . import DiscrepancyModel
 
     doc, needs_prior = _stored(args.model)
@@ -196,6 +199,7 @@ def _simulation_inputs(args, model):
 
 
 def cmd_show(args) -> None:
+    """``discrepancy show``: print a saved model's equations (``--latex``: as LaTeX)."""
     from . import DiscrepancyModel
 
     doc, callable_prior = _stored(args.model)
@@ -221,6 +225,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``discrepancy`` command's argument parser: ``fit``, ``simulate``, ``show`` and the
+    commands of installed plug-ins (``reproduce``)."""
     p = _Parser(prog="discrepancy", epilog=EPILOG,
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 description="Learn sparse discrepancy models f_m + g with SINDy.")

@@ -139,6 +139,7 @@ class _NoneConstraint(Constraint):
         return "None"
 
 
+#: the constraint "a callable" (priors, user functions)
 is_callable = Predicate(callable, "a callable")
 boolean = InstanceOf(bool, "True or False")
 

@@ -43,9 +43,12 @@ class Registry:
         return add
 
     def names(self) -> list[str]:
+        """The registered names, sorted."""
         return sorted(self._classes)
 
     def get(self, name: str) -> type:
+        """The class registered as ``name``; an unknown name raises
+        :class:`~discrepancy.errors.UnknownNameError` listing the valid ones."""
         if name not in self._classes:
             raise UnknownNameError(f"{self.argument} {name!r} is not a known {self.kind}; "
                                    f"valid names: {', '.join(self.names())}")

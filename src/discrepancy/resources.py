@@ -19,14 +19,15 @@ import os
 
 from .errors import ResourceError
 
-__all__ = ["MAX_FEATURES", "MEMORY_LIMIT", "check_features", "check_memory", "memory_budget",
-           "n_bytes"]
+__all__ = ["MAX_FEATURES", "MEMORY_FRACTION", "MEMORY_LIMIT", "check_features", "check_memory",
+           "memory_budget", "n_bytes"]
 
 #: most columns a library may have (Θᵀ Θ of 50,000 columns alone is 20 GB)
 MAX_FEATURES = 50_000
 #: bytes one allocation may take; ``None``: :data:`MEMORY_FRACTION` of the memory this
 #: process may use (the machine's, or less under ``ulimit -v``). Set it to change the limit.
 MEMORY_LIMIT: int | None = None
+#: share of the memory this process may use that one allocation may take by default
 MEMORY_FRACTION = 0.8
 #: allocations this small are never refused (and cost no look-up of the budget)
 ALWAYS_ALLOWED = 2**26

@@ -25,9 +25,11 @@ class DiscrepancyUpdater:
             from the data (the default) is chosen on the first log and then kept, so every
             log's statistics are made the same way.
 
-    Attributes (after the first :meth:`update`):
-        setup_: the frozen :class:`~discrepancy.models.setup.FitSetup`;
-        statistics_: the summed Gram statistics; models_: the model after each update.
+    Attributes:
+        setup_: the frozen :class:`~discrepancy.models.setup.FitSetup` (after the first
+            :meth:`update`).
+        statistics_: the summed Gram statistics.
+        models_: the model after each update.
     """
 
     def __init__(self, model):

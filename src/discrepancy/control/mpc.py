@@ -1,7 +1,7 @@
 """Nonlinear model predictive control on a (hybrid) model: CasADi Opti, IPOPT, warm starts.
 
 At every sample the controller solves, by direct multiple shooting over ``horizon`` hold
-intervals of ``dt`` (``substeps`` RK4 steps each, as the planner),
+intervals of ``dt`` (``substeps`` RK4 steps each, as the planner)::
 
     min  Σ_j (x_j - r_j)ᵀ Q (x_j - r_j) + (u_j - v_j)ᵀ R (u_j - v_j)
          + (x_N - r_N)ᵀ P (x_N - r_N) + ρ Σ (σ + σ²)

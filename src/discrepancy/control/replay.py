@@ -44,6 +44,7 @@ class Run:
 
     @property
     def final(self) -> np.ndarray:
+        """The last state ``(n,)``."""
         return self.x[-1]
 
 

@@ -1,7 +1,8 @@
 """The multiple-shooting problem of a plan: decision variables, dynamics, limits, objective.
 
 :func:`build` turns a validated :class:`Problem` into a CasADi ``Opti``; the planner
-(:mod:`.trajectory`) solves it, and :mod:`.feasibility` solves relaxed versions of it.
+(:mod:`~discrepancy.control.trajectory`) solves it, and
+:mod:`~discrepancy.control.feasibility` solves relaxed versions of it.
 """
 from __future__ import annotations
 
@@ -32,10 +33,12 @@ class Problem:
 
     @property
     def dt(self) -> float:
+        """The hold interval (s)."""
         return float(self.t[1] - self.t[0])
 
     @property
     def n_intervals(self) -> int:
+        """Number of hold intervals."""
         return len(self.t) - 1
 
 

@@ -32,7 +32,9 @@ PLAN_CONSTRAINTS = {"T": [Interval(Real, 0, closed="neither")],
 #: bytes of the NLP per interval and squared state-plus-input size (CasADi's expression graph
 #: and IPOPT's derivative matrices; an estimate, for refusing absurd sizes before building)
 NLP_BYTES_PER_ENTRY = 1000
+#: the paper's swing-up state weights (φ1, φ2, s, dφ1, dφ2, ds), diagonal of ``Q``
 PAPER_Q = (10.0, 10.0, 20.0, 1.0, 1.0, 0.1)
+#: the paper's swing-up input weight ``R``
 PAPER_R = 1.0
 
 
@@ -63,6 +65,7 @@ class Plan:
 
     @property
     def dt(self) -> float:
+        """The hold interval (s)."""
         return float(self.t[1] - self.t[0])
 
 

@@ -25,9 +25,11 @@ class Chunk:
     """Consecutive rows of one trajectory (see the module docstring).
 
     Attributes:
-        x: states ``(k, n)``; t: times ``(k,)`` or ``None``; u: inputs ``(k, r)`` or
-        ``None``; x_dot: measured derivatives ``(k, n)`` or ``None``; weight: the rows'
-        weights in the regression ``(k,)`` or ``None``;
+        x: states ``(k, n)``.
+        t: times ``(k,)`` or ``None``.
+        u: inputs ``(k, r)`` or ``None``.
+        x_dot: measured derivatives ``(k, n)`` or ``None``.
+        weight: the rows' weights in the regression ``(k,)`` or ``None``.
         where: description used in error messages (e.g. ``"run3.h5 rows 0..65535"``).
     """
 
@@ -40,9 +42,11 @@ class Chunk:
 
     @property
     def n_rows(self) -> int:
+        """Number of rows ``k``."""
         return self.x.shape[0]
 
     def rows(self, start: int, stop: int | None = None) -> Chunk:
+        """Rows ``start:stop`` of every field, as a new chunk."""
         cut = slice(start, stop)
         return replace(self, **{f: None if getattr(self, f) is None else getattr(self, f)[cut]
                                 for f in FIELDS})
@@ -70,6 +74,8 @@ class IterableSource(ChunkSource):
 
 
 def as_source(x) -> ChunkSource:
+    """Chunked data as a :class:`ChunkSource`: a source as it is, an iterator of chunks as one
+    trajectory, a list of sources or of iterators as several."""
     if isinstance(x, ChunkSource):
         return x
     if isinstance(x, Iterator):

@@ -23,6 +23,7 @@ NAMES = [None, NAME, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v)
     isinstance(n, str) for n in v), "a non-empty list of names")]
 #: memory of reading a CSV file whole, per character of it (Python lists of floats)
 CSV_BYTES_PER_CHARACTER = 8
+#: file suffixes :func:`load` reads, and the format each means
 SUFFIXES = {".csv": "csv", ".txt": "csv", ".npz": "npz", ".mat": "mat", ".h5": "hdf5",
             ".hdf5": "hdf5", ".hdf": "hdf5"}
 
@@ -32,8 +33,10 @@ class LoadedData:
     """Arrays read from a file.
 
     Attributes:
-        x: states ``(m, n)``; t: times ``(m,)`` or ``None`` (give a step to ``fit``);
-        u: inputs ``(m, r)`` or ``None``; state_names, input_names: column names.
+        x: states ``(m, n)``.
+        t: times ``(m,)`` or ``None`` (then give a step to ``fit``).
+        u: inputs ``(m, r)`` or ``None``.
+        state_names, input_names: column names.
     """
 
     x: np.ndarray
@@ -56,10 +59,12 @@ def load(path, *, states=None, inputs=None, time: str | None = "t") -> LoadedDat
         time: name of the time column/variable (``None``: no times in the file).
 
     Raises:
-        MissingFileError (a FileNotFoundError), UnknownNameError (unknown suffix or
-        variable, listing what the file has), DataError (a folder, a corrupt file,
-        non-numeric or non-finite values, bad times), ResourceError (an array too large
-        to read whole; only the arrays asked for are read).
+        MissingFileError: (a ``FileNotFoundError``) no such file.
+        UnknownNameError: an unknown suffix or variable (the message lists what the file
+            has).
+        DataError: a folder, a corrupt file, non-numeric or non-finite values, bad times.
+        ResourceError: an array too large to read whole (only the arrays asked for are
+            read).
     """
     validate_params("io.load", {"states": states, "inputs": inputs, "time": time},
                     {"states": NAMES, "inputs": NAMES, "time": [None, NAME]})

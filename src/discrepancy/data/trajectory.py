@@ -36,6 +36,7 @@ class Trajectory:
 
     @property
     def n_samples(self) -> int:
+        """Number of samples ``m``."""
         return self.x.shape[0]
 
 

@@ -78,8 +78,8 @@ def check_array(name: str, a, *, n_rows: int | None = None, n_cols: int | None =
             the first one, for messages.
 
     Raises:
-        ShapeError for non-numeric input or wrong shapes, DataError for complex, date or
-        non-finite values.
+        ShapeError: non-numeric input or wrong shapes.
+        DataError: complex, date or non-finite values.
     """
     arr = as_float_array(name, a, where)
     if ndim == 2 and arr.ndim == 1 and allow_1d:

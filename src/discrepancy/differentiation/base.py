@@ -20,7 +20,7 @@ from ..registry import Registry
 class Differentiator(Estimator, ABC):
     """Estimate time derivatives of sampled trajectories.
 
-    Subclasses implement :meth:`_compute` and set ``uniform_only``.
+    Subclasses implement ``_compute(x, t)`` and set ``uniform_only``.
     ``halo`` is the number of neighbouring samples on each side a derivative
     depends on (used to stitch chunks exactly); ``None`` means global methods.
     """
@@ -29,10 +29,13 @@ class Differentiator(Estimator, ABC):
 
     @property
     def min_samples(self) -> int:
+        """Fewest samples a trajectory needs for this method."""
         return 3
 
     @property
     def halo(self) -> int | None:
+        """Samples on each side a derivative depends on (``None``: the whole record, so the method
+        cannot stream)."""
         return None
 
     @property
@@ -70,6 +73,8 @@ register = METHODS.register
 
 
 def available_methods() -> list[str]:
+    """Names of the registered differentiation methods (the specs ``differentiation_method``
+    accepts)."""
     return METHODS.names()
 
 

@@ -17,7 +17,9 @@ import numpy as np
 
 from ..errors import CoarseSamplingWarning, DiscrepancyError
 
+#: relative error of a sine's derivative above which the sampling is too coarse
 TOLERANCE = 0.02
+#: samples per period below which content counts as coarsely sampled
 COARSE = 20
 SHARE = 0.95
 ROWS = 4096

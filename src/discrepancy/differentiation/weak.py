@@ -53,6 +53,7 @@ class WeakForm(Differentiator):
 
     @property
     def data_driven(self) -> bool:
+        """True when the window is chosen from the data at each fit (``window_length=None``)."""
         return self.window_length is None
 
     @property

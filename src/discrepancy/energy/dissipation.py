@@ -126,10 +126,10 @@ def support_loss_terms(pivot_force: Callable, state_names, *,
     """Energy absorbed by a rig's mount: ``c Fx^2`` and ``c (Fy - W)^2``.
 
     ``pivot_force(x)`` ``(m, n)`` -> ``(m, 2)`` is the force (N) between pivot and pendulum,
-    e.g. :meth:`DoublePendulum.pivot_force`; ``static_vertical`` is its value at rest (the
-    weight ``W``), so that only the dynamic part counts. A mount whose motion under that
-    force is dominated by damping moves at ``F / c_m`` and dissipates ``F^2 / c_m``; the
-    coefficient ``c = 1 / c_m`` has the unit m / (N s).
+    e.g. :meth:`~discrepancy.systems.DoublePendulum.pivot_force`; ``static_vertical`` is its
+    value at rest (the weight ``W``), so that only the dynamic part counts. A mount whose
+    motion under that force is dominated by damping moves at ``F / c_m`` and dissipates
+    ``F^2 / c_m``; the coefficient ``c = 1 / c_m`` has the unit m / (N s).
     """
     args = [symbol(n) for n in state_names]
 

@@ -152,6 +152,7 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
             of the training part.
         n_origins: forecast origins, spaced ``horizon / 2`` apart at most, the last window
             ending at ``split``.
+        progress: a progress bar over the procedures (tqdm); ``None``: only on a terminal.
     """
     q = as_2d("q", q, allow_1d=True)
     t = as_times("t", t, len(q))

@@ -81,6 +81,7 @@ class FeatureLibrary(Estimator, ABC):
         return {}
 
     def get_feature_names(self) -> list[str]:
+        """Names of the ``p`` columns of Θ in column order (e.g. ``"x1^2 x2"``); needs a fit."""
         if not hasattr(self, "feature_expressions_"):
             raise NotFittedError(f"{type(self).__name__}.get_feature_names called before fit")
         return [feature_name(e, self.names_) for e in self.feature_expressions_]

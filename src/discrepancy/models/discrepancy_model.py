@@ -197,6 +197,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
     # --------------------------------------------------------------- evaluation
     @property
     def variable_names_(self) -> list[str]:
+        """The states' then the inputs' names: the variables the library acts on, ``z = [x, u]``."""
         return [*self.state_names_, *self.input_names_]
 
     def _variables(self, x, u) -> tuple[np.ndarray, np.ndarray | None]:
@@ -309,6 +310,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         return self.coef_.copy()
 
     def get_feature_names(self) -> list[str]:
+        """Names of the library's ``p`` terms, the column order of :meth:`coefficients`."""
         self.check_is_fitted()
         return [feature_name(e, self.variable_names_) for e in self.feature_expressions_]
 
@@ -457,7 +459,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
 
 
 def load_model(path, prior=None, *, functions=None) -> DiscrepancyModel:
-    """Load a model saved with :meth:`DiscrepancyModel.save` (see :meth:`~DiscrepancyModel.
-    from_state` for ``prior`` and ``functions``)."""
+    """Load a model saved with :meth:`DiscrepancyModel.save` (see
+    :meth:`~DiscrepancyModel.from_state` for ``prior`` and ``functions``)."""
     from .model_file import read_json
     return DiscrepancyModel.from_state(read_json(path), prior=prior, functions=functions)

@@ -33,6 +33,8 @@ def discrepancy_expressions(model) -> list[sp.Expr]:
 
 
 def to_sympy(model, part=None) -> list[sp.Expr]:
+    """The model's right-hand sides as sympy expressions (see
+    :meth:`~discrepancy.DiscrepancyModel.to_sympy`)."""
     part = _part(model, part)
     g = discrepancy_expressions(model)
     if part == "discrepancy" or not model.prior_.is_symbolic:
@@ -41,6 +43,7 @@ def to_sympy(model, part=None) -> list[sp.Expr]:
 
 
 def to_latex(model, precision: int = 4, part=None) -> str:
+    """The model's equations as LaTeX (see :meth:`~discrepancy.DiscrepancyModel.to_latex`)."""
     from ..constraints import Integral, Interval, validate_params
 
     validate_params("to_latex", {"precision": precision},

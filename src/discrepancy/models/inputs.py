@@ -24,12 +24,15 @@ from ..data.trajectory import as_2d
 from ..data.validation import as_float_array
 from ..errors import DataError, ParameterError, ShapeError
 
+#: how an input is held between its samples (``u_hold=``)
 HOLDS = ("linear", "zoh", "bandlimited")
 #: fine-grid factor used to evaluate a band-limited input at arbitrary times
 BANDLIMITED_OVERSAMPLING = 16
 
 
 def check_hold(hold) -> str:
+    """``hold`` if it is one of :data:`HOLDS`, else a :class:`~discrepancy.errors.ParameterError`.
+    """
     if not isinstance(hold, str) or hold not in HOLDS:
         raise ParameterError(f"u_hold must be one of {', '.join(map(repr, HOLDS))}; got "
                              f"{hold!r}")

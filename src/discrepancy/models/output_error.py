@@ -165,6 +165,8 @@ class OutputErrorFit:
 
     # ------------------------------------------------------------------ scores
     def simulate_outputs(self, coef, x0s):
+        """The outputs of every record simulated with coefficients ``coef`` from the initial states
+        ``x0s``, one ``(m, k)`` array per record."""
         return [self.out_map(self.shooting.simulate(x0, r.stages, r.h, coef))
                 for x0, r in zip(x0s, self.records, strict=True)]
 
@@ -218,16 +220,21 @@ class OutputErrorFit:
         return out
 
     def importance(self, coef) -> np.ndarray:
+        """Size of each coefficient relative to its scale, ``|ξ| / scale``, flattened (to rank
+        terms)."""
         return np.abs(coef.ravel()) / self.coef_scale
 
 
 def records_of(model, y, t, u, substeps, hold):
+    """The records of ``y``, ``t``, ``u`` prepared for simulation, and the number of inputs ``r``.
+    """
     trajectories = as_trajectories(y, t, u, x_name="y")
     r = 0 if trajectories[0].u is None else trajectories[0].u.shape[1]
     return [_Record(tr, r, substeps, check_hold(hold)) for tr in trajectories], r
 
 
 def n_states_of(model, x0) -> int:
+    """Number of states of the model: from ``state_names``, a sympy prior or ``x0``."""
     if model.state_names is not None:
         return 1 if isinstance(model.state_names, str) else len(model.state_names)
     if isinstance(model.prior, (list, tuple)):
@@ -269,6 +276,7 @@ def check_identifiable(fit):
 
 
 def warn_if_not_converged(fit, coef, x0s, rows):
+    """The fit's output error; warns when the fitted model's simulation diverges on the data."""
     err = fit.error(coef, x0s, rows)
     if not np.isfinite(err):
         warnings.warn("the fitted model's simulation diverges on the data", stacklevel=4)

@@ -39,6 +39,7 @@ class SupportScore:
 
     @property
     def n_terms(self) -> int:
+        """Number of terms in the support."""
         return int(self.support.sum())
 
     @property

@@ -42,6 +42,8 @@ class OutputErrorMethods:
                 threshold drops coefficients below it instead. Term masks of
                 ``constraints`` are honoured. The model's states come from
                 ``state_names``, a sympy prior or ``x0``.
+            progress: a progress bar over the supports tried (tqdm); ``None``: only on a
+                terminal.
 
         After the fit, ``x0_`` holds the estimated initial states, ``output_selection_``
         the scored supports, ``output_error_`` the scaled RMS output error of the fit and

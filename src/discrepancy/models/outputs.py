@@ -67,6 +67,8 @@ class OutputMap:
         return np.column_stack([f(states) for f in self._values])
 
     def jacobian(self, states: np.ndarray) -> np.ndarray:
+        """Derivatives of the ``k`` outputs by the ``n`` states at ``states`` ``(m, n)``:
+        ``(m, k, n)``."""
         m = states.shape[0]
         if self.selected is not None:
             out = np.zeros((m, self.k, self.n))

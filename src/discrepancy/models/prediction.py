@@ -46,6 +46,8 @@ def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,
 
 
 def checked_states(model, x, u):
+    """``x`` as ``(m, n)`` after checking it and ``u`` against the fitted model's states and inputs
+    (:class:`~discrepancy.errors.ShapeError` otherwise)."""
     x = as_2d("x", x, n_cols=model.n_states_, allow_1d=model.n_states_ == 1)
     if model.n_inputs_ and u is None:
         raise ShapeError(f"u is required: the model has inputs {model.input_names_}")

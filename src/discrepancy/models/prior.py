@@ -52,6 +52,8 @@ class Prior:
 
     @property
     def is_symbolic(self) -> bool:
+        """True when the prior is given as sympy expressions (then the whole hybrid model exports).
+        """
         return self.expressions is not None
 
     def __call__(self, x: np.ndarray, u: np.ndarray | None) -> np.ndarray:

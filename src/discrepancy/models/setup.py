@@ -62,14 +62,17 @@ class FitSetup:
 
     @property
     def n_states(self) -> int:
+        """Number of states ``n``."""
         return len(self.state_names)
 
     @property
     def n_inputs(self) -> int:
+        """Number of inputs ``r``."""
         return len(self.input_names)
 
     @property
     def n_features(self) -> int:
+        """Number of library columns ``p``."""
         return self.library.n_features_
 
     def rows(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -91,10 +91,10 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
             Python.
 
     Raises:
-        SimulationError (a ConvergenceError) when the solution stops early: a non-finite
-        right-hand side (blow-up), a failed step, or the evaluation budget spent (stiff or
-        discontinuous dynamics); it says when and where, and ``.partial`` holds the states
-        at the output times reached.
+        SimulationError: (a ``ConvergenceError``) when the solution stops early: a
+            non-finite right-hand side (blow-up), a failed step, or the evaluation budget
+            spent (stiff or discontinuous dynamics); it says when and where, and
+            ``.partial`` holds the states at the output times reached.
     """
     _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws)
     x0 = np.asarray(x0, dtype=float).ravel()

@@ -137,6 +137,7 @@ class Optimizer(Estimator, ABC):
     _fit_hint = "fit or fit_gram"
 
 
+#: the optimizers by spec name (``"stlsq"``, ``"lasso"``, ...)
 OPTIMIZERS = Registry("optimizer", "optimizer", Optimizer)
 register = OPTIMIZERS.register
 

@@ -138,6 +138,7 @@ class GramStatistics:
         return out
 
     def empty_like(self) -> GramStatistics:
+        """Empty statistics of the same size, folds and segment length (to accumulate into)."""
         return GramStatistics(self.p, self.n, self.n_folds, self.segment)
 
     def scaled(self, scale: np.ndarray) -> GramStatistics:

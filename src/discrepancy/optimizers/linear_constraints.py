@@ -69,10 +69,12 @@ class LinearConstraints:
 
     @property
     def allowed(self) -> np.ndarray:
+        """Boolean mask ``(n, p)`` of the coefficients that may be nonzero."""
         return np.ones((self.n, self.p), bool) if self.mask is None else np.asarray(self.mask)
 
     @property
     def has_linear(self) -> bool:
+        """True when there are linear equality or inequality constraints besides the mask."""
         return self.eq_lhs is not None or self.ub_lhs is not None
 
     def involved(self) -> np.ndarray:

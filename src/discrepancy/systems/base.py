@@ -38,6 +38,7 @@ class System(ABC):
 
     @property
     def n_states(self) -> int:
+        """Number of states ``n``."""
         return len(self.state_names)
 
 

@@ -31,10 +31,12 @@ class DoublePendulumParameters:
     """Physical parameters; defaults are the paper's Table 1 (SI units).
 
     Attributes:
-        m1, m2: arm masses (kg). a1, a2: pivot-to-centre-of-mass distances (m).
-        l1: length of the first arm, pivot to pivot (m). I1, I2: inertias about the
-        centres of mass (kg m^2). k1, k2: viscous friction of joint 1 and joint 2
-        (N m s / rad). g: gravity (m/s^2).
+        m1, m2: arm masses (kg).
+        a1, a2: pivot-to-centre-of-mass distances (m).
+        l1: length of the first arm, pivot to pivot (m).
+        I1, I2: inertias about the centres of mass (kg m^2).
+        k1, k2: viscous friction of joint 1 and joint 2 (N m s / rad).
+        g: gravity (m/s^2).
     """
 
     m1: float = PAPER_TABLE_1["m1"]
@@ -73,6 +75,7 @@ class DoublePendulumParameters:
         return cls.from_array(contents[variable])
 
     def as_dict(self) -> dict[str, float]:
+        """``{name: value}`` in the order of the model's parameter vector."""
         return dict(zip(PARAMETER_ORDER, astuple(self), strict=True))
 
 
@@ -140,6 +143,7 @@ class DoublePendulum(System):
 
     @property
     def parameters(self) -> DoublePendulumParameters:
+        """The parameters in use: ``params``, or the paper's Table 1."""
         p = self.params if self.params is not None else DoublePendulumParameters()
         if not isinstance(p, DoublePendulumParameters):
             raise ParameterError(f"params must be DoublePendulumParameters; got {type(p).__name__}")
@@ -250,6 +254,7 @@ class DoublePendulum(System):
 
     @property
     def position_names(self) -> tuple[str, ...]:
+        """Names of the two angles (the first half of the state)."""
         return STATE_NAMES[:2]
 
     def joints(self) -> dict:

@@ -91,6 +91,7 @@ class LagrangianSystem(System):
 
     @property
     def position_names(self) -> tuple[str, ...]:
+        """Names of the coordinates (the first half of the state; their velocities follow)."""
         return self.state_names[:len(self.state_names) // 2]
 
     def joints(self) -> dict:

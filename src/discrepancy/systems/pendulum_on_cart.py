@@ -93,6 +93,7 @@ class PendulumOnCart(System):
 
     @property
     def parameters(self) -> PendulumOnCartParameters:
+        """The parameters in use: ``params``, or the paper's Table 1."""
         p = self.params if self.params is not None else PendulumOnCartParameters()
         if not isinstance(p, PendulumOnCartParameters):
             raise ParameterError(f"params must be a PendulumOnCartParameters; got {describe(p)}")
