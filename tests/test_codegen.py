@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from discrepancy.control import MPC, codegen
-from discrepancy.control.codegen import CompilationWarning, compiled
+from discrepancy.control.codegen import compiled
+from discrepancy.errors import CompilationWarning
 
 needs_cc = pytest.mark.skipif(codegen.compiler() is None, reason="no C compiler")
 

@@ -21,17 +21,13 @@ import warnings
 from pathlib import Path
 
 from .._optional import require
-from ..errors import ParameterError
+from ..errors import CompilationWarning, ParameterError
 
 ca = require("casadi", purpose="discrepancy.control")
 
 #: optimisation flag: -O1 gives most of -O2's speed on CasADi's straight-line code at a
 #: fraction of its compile time (measured on the cart MPC's condensing: 21 s against 160 s)
 OPTIMISATION = "-O1"
-
-
-class CompilationWarning(UserWarning):
-    """A function could not be compiled and runs in CasADi's virtual machine instead."""
 
 
 def cache_dir() -> Path:
