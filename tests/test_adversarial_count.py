@@ -1,4 +1,4 @@
-"""The adversarial suite tries 688 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 724 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -19,12 +19,12 @@
 | dask | 11 |
 | cli | 45 |
 | energy | 44 |
-| control | 25 |
+| control | 61 |
 | isolated | 48 |
-| total | 688 |
+| total | 724 |
 
-574 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 114 must give the right answer, checked against an
+605 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 119 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 48 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly

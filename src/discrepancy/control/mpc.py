@@ -142,7 +142,7 @@ class MPC:
             u_prev: ``(r,)`` input applied during the last interval (rate limit; default 0).
             P: ``(n, n)`` terminal weight (default ``Q``).
             warm: the previous :class:`MPCSolution`, shifted by one sample as initial guess
-                (default: the reference).
+                (default, and after a failed real-time step: the reference).
         """
         N, n, r = self.horizon, self.n, self.r
         x_ref, u_ref = np.asarray(x_ref, dtype=float), np.asarray(u_ref, dtype=float)
@@ -154,8 +154,9 @@ class MPC:
         x = np.asarray(x, dtype=float).ravel()
         if x.shape != (n,):
             raise ShapeError(f"x must be the measured state ({n},); got shape {x.shape}")
-        if warm is None:
-            xg, ug = x_ref.T, u_ref.T
+        if warm is None or not (np.all(np.isfinite(warm.x)) and np.all(np.isfinite(warm.u))) \
+                or (self.solver == "rti" and not warm.success):
+            xg, ug = x_ref.T, u_ref.T       # no warm start from a failed or diverged solve
         else:
             xg = np.hstack([warm.x[1:].T, warm.x[-1:].T])
             ug = np.hstack([warm.u[1:].T, warm.u[-1:].T])
@@ -177,6 +178,9 @@ class MPC:
         ok = True
         for _ in range(self.max_iter):
             X, U, S, converged = self._rti.step(x, u_prev, x_ref.T, u_ref.T, P, X, U)
+            if not converged:   # a warm start gone astray: one step from the reference
+                X, U, S, converged = self._rti.step(x, u_prev, x_ref.T, u_ref.T, P,
+                                                    x_ref.T, u_ref.T)
             ok = ok and converged
         elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
         E, V = X.T - x_ref, U.T - u_ref

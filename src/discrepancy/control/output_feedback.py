@@ -10,6 +10,8 @@ applied, predicts the filter over the hold interval.
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..errors import ParameterError, ShapeError, describe
@@ -31,7 +33,9 @@ class OutputFeedback:
 
     Attributes:
         estimates: ``(k+1, n)`` filtered states the law acted on, one per sample so far;
-        stds: their standard deviations (the filter's own uncertainty).
+        stds: their standard deviations (the filter's own uncertainty);
+        cpu_times: CPU time (s) per sample of the filter's update and prediction and the
+            inner law together (what the controller computes per sample).
     """
 
     def __init__(self, law, estimator, *, x0, P0, dt: float):
@@ -51,7 +55,7 @@ class OutputFeedback:
         """Restart the filter from ``x0``, ``P0`` and the inner law (a new run)."""
         self._state = self.estimator.start(self.x0, self.P0)
         self._updated = False
-        self._estimates, self._stds = [], []
+        self._estimates, self._stds, self.cpu_times, self._cpu = [], [], [], 0.0
         if hasattr(self.law, "reset"):
             self.law.reset()
 
@@ -60,19 +64,24 @@ class OutputFeedback:
             raise ShapeError("OutputFeedback was called twice without notify_applied: run it "
                              "in closed_loop (which reports the applied input) or call "
                              "notify_applied(u) after each input")
+        start = time.process_time()
         self._state = self.estimator.update(self._state, np.asarray(y, dtype=float).ravel())
         self._updated = True
         self._estimates.append(self._state.x.copy())
         self._stds.append(np.sqrt(np.clip(np.diag(self._state.P), 0, None)))
-        return self.law(k, self._state.x)
+        u = self.law(k, self._state.x)
+        self._cpu = time.process_time() - start
+        return u
 
     def notify_applied(self, u) -> None:
         """The input the actuator applied: the inner law is told, the filter predicts."""
+        start = time.process_time()
         u = np.asarray(u, dtype=float).ravel()
         if hasattr(self.law, "notify_applied"):
             self.law.notify_applied(u)
         self._state = self.estimator.predict(self._state, u, self.dt)
         self._updated = False
+        self.cpu_times.append(self._cpu + time.process_time() - start)
 
     @property
     def estimates(self) -> np.ndarray:

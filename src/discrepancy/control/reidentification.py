@@ -126,6 +126,11 @@ class SmoothedLogUpdater:
         self.models_.append(fitted)
         return fitted
 
+    def update_from(self, run):
+        """:meth:`update` with the control log of a :class:`~.closed_loop.ClosedLoopRun`."""
+        y, dt, u = self.log_of(run)
+        return self.update(y, dt, u=u)
+
     def log_of(self, run):
         """``(y, t, u)`` of a :class:`~.closed_loop.ClosedLoopRun` for :meth:`update`: its
         control-rate log, the columns of ``outputs``."""

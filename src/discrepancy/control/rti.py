@@ -128,8 +128,10 @@ class RealTimeIteration:
                                        soft_penalty), enabled=compile)
         qp = ca.conic("mpc_qp", qp_solver, {"h": condense.sparsity_out("H"),
                                             "a": condense.sparsity_out("C")},
-                      {"error_on_fail": False, **QP_OPTIONS.get(qp_solver, {})})
+                      {"error_on_fail": False, "inputs_check": False,
+                       **QP_OPTIONS.get(qp_solver, {})})
         self._step = self._compose(linearise, condense, qp)
+        self.n_slacks = condense.sparsity_out("H").size1() - horizon * r
 
     def _compose(self, linearise, condense, qp) -> ca.Function:
         """One CasADi call per step: linearise, condense, solve the QP, expand the states
@@ -147,13 +149,17 @@ class RealTimeIteration:
 
     def step(self, x0, u_prev, Xr, Ur, P, Xb, Ub):
         """One Gauss-Newton step from the linearisation point ``(Xb (n, N+1), Ub (r, N))``:
-        ``(X (n, N+1), U (r, N), S (slacks), solved)``. ``solved``: the QP's answer is finite
-        and keeps the input bounds and rates (to 1e-6 of their size); if not, the point is
-        returned as it was (its inputs are the shifted previous plan)."""
-        X, U, S = (v.full() for v in self._step(x0, u_prev, Xr, Ur, P, Xb, Ub))
-        if self._solved(U, u_prev):
+        ``(X (n, N+1), U (r, N), S (slacks), solved)``. ``solved``: the QP was solved, its
+        states are finite and its inputs keep the bounds and rates (to 1e-6 of their size);
+        if not, the point is returned as it was (its inputs are the shifted previous plan)."""
+        try:
+            X, U, S = (v.full() for v in self._step(x0, u_prev, Xr, Ur, P, Xb, Ub))
+        except RuntimeError:        # the QP solver refused its data (NaN from a diverged point)
+            X = U = S = None
+        if X is not None and np.all(np.isfinite(X)) and self._solved(U, u_prev):
             return X, U, S.ravel(), True
-        return np.asarray(Xb, dtype=float), np.asarray(Ub, dtype=float), np.zeros(S.size), False
+        return (np.asarray(Xb, dtype=float), np.asarray(Ub, dtype=float),
+                np.zeros(self.n_slacks), False)
 
     def _solved(self, U, u_prev) -> bool:
         if not np.all(np.isfinite(U)):
