@@ -8,10 +8,11 @@ are too short to differentiate through noise, and unmeasured states have no samp
 
 1. runs an extended Kalman filter and its Rauch–Tung–Striebel smoother
    (:mod:`discrepancy.estimation`) on the current model (the prior, then the last model
-   learned) over the whole log: every state at every sample, the input held between samples
-   as the controller held it. The process-noise intensity (one number for the rows the
-   discrepancy may act on) is the one whose filter best predicts the measurements (largest
-   innovation likelihood on a grid: the prediction-error criterion, no tuning by hand);
+   learned; in later passes the model just fitted) over the whole log: every state at every
+   sample, the input held between samples as the controller held it. The process-noise
+   intensity (one number for the rows the discrepancy may act on) is the one whose filter
+   best predicts the measurements (largest innovation likelihood on a grid: the
+   prediction-error criterion, no tuning by hand);
 2. fits the discrepancy ``g = Ξ θ(x, u)`` so that the hybrid model's step over each
    control interval, from the smoothed state, lands on the next smoothed state. The step
    is the prior's RK4 flow plus ``g``; the fit iterates ``target_k = (x̂_{k+1} -
@@ -65,14 +66,16 @@ class SmoothedLogUpdater:
             libraries whose columns differ in scale (an input of 20 beside sines of 1).
         substeps: RK4 steps per control interval in the estimator and the fit.
         max_sweeps: most fixed-point iterations of the fit.
-        passes: most rounds of smoothing with the latest model and refitting per update
-            (the smoother leans towards the model it runs; re-smoothing with the learned
-            model removes that pull), stopping when the coefficients settle (0.1 %).
+        passes: most rounds of smoothing and fitting per update. The first chooses the
+            terms; the others re-smooth with the latest model and refit those terms (the
+            smoother leans towards the model it runs; re-smoothing with the learned model
+            removes that pull), stopping when the coefficients settle (0.1 %).
 
     Attributes (after :meth:`update`): ``models_`` (one per update), ``smoothed_`` (the
     smoothed states of every log by the last model, ``(m, n)`` each), ``process_noise_``
-    (the process-noise std per state used for each log), ``sweeps_`` (iterations of the
-    last fit).
+    (the process-noise std per state used for each log), ``process_noise_passes_`` (the
+    same for every pass of the last update: the first pass's is chosen with the model the
+    update started from), ``sweeps_`` (iterations of the last fit).
     """
 
     def __init__(self, model, *, outputs, measurement_noise, kinematics=None,
@@ -107,14 +110,16 @@ class SmoothedLogUpdater:
             raise ShapeError(f"a log needs at least 3 samples; got {len(y)}")
         self._raw.append((y, float(t), u))
         current = self.models_[-1] if self.models_ else self.start
-        levels = [None] * len(self._raw)
+        levels, chosen, self.process_noise_passes_ = [None] * len(self._raw), None, []
         for _ in range(self.passes):
             smoothed = [self._smooth(setup, current, *log, previous=level)
                         for log, level in zip(self._raw, levels, strict=True)]
             levels = [float(np.max(q)) or None for _, q in smoothed]
+            self.process_noise_passes_.append([q for _, q in smoothed])
             self._logs = [(x, log[2], log[1]) for (x, _), log in
                           zip(smoothed, self._raw, strict=True)]
-            fitted = self._fit(setup)
+            fitted = self._fit(setup, chosen)
+            chosen = fitted if chosen is None else chosen
             settled = current is not None and hasattr(current, "coefficients") and \
                 np.allclose(fitted.coefficients(), current.coefficients(), rtol=1e-3,
                             atol=1e-6 * max(np.max(np.abs(fitted.coefficients())), 1e-12))
@@ -209,8 +214,10 @@ class SmoothedLogUpdater:
         return ekf.smooth(result)[0], q
 
     # -------------------------------------------------------------------- fit
-    def _fit(self, setup):
-        """Fixed-point iteration of the one-step regression (module docstring)."""
+    def _fit(self, setup, chosen=None):
+        """Fixed-point iteration of the one-step regression (module docstring): terms
+        chosen by the optimizer, or, given the model ``chosen`` of an earlier pass, its
+        terms refitted by least squares."""
         from ..optimizers import GramStatistics
 
         n, p = setup.n_states, setup.n_features
@@ -225,7 +232,10 @@ class SmoothedLogUpdater:
                 theta, target, signal = self._rows(x, u, dt, coef)
                 stats.add(theta, target, signal, first_row=first)
                 first += len(theta)
-            fitted = copy.deepcopy(self._template).fit_statistics(stats, setup)
+            if chosen is None:
+                fitted = copy.deepcopy(self._template).fit_statistics(stats, setup)
+            else:
+                fitted = chosen.with_coefficients(_refit(stats, chosen.coefficients() != 0))
             new = fitted.coefficients()
             change = np.max(np.abs(new - coef)) / max(np.max(np.abs(new)), 1e-12)
             coef = new
@@ -247,6 +257,16 @@ class SmoothedLogUpdater:
         stepped = stepped.full().T
         target = (x[1:] - stepped) / dt + theta @ coef.T
         return theta, target, (x[1:] - x[:-1]) / dt
+
+
+def _refit(stats, support) -> np.ndarray:
+    """Least-squares coefficients ``(n, p)`` of each state's terms in ``support``."""
+    coef = np.zeros(support.shape)
+    for i, terms in enumerate(support):
+        if terms.any():
+            coef[i, terms] = np.linalg.lstsq(stats.gram[np.ix_(terms, terms)],
+                                             stats.rhs[terms, i], rcond=None)[0]
+    return coef
 
 
 def _check_settings(updater) -> None:
