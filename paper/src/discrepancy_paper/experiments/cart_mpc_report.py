@@ -199,7 +199,9 @@ def _output_feedback_section(rep, res, nom, task, estimation_figure):
     rep.text("## Output feedback\n\nOnly φ1, φ2 and s are measured. The hybrid model is "
              "learned from the flawed attempt's 20 ms log of these three (smoothed, see "
              "below), planned on, and controlled through an EKF on it whose process noise "
-             "(on the rates only) is the one the learning chose by the filter's likelihood: "
+             "(on the rates only) is the one the learning chose by the filter's likelihood "
+             "with the prior (its first pass; the learned model's own, 30 times smaller, lost "
+             "three of four perturbed plants in a trial run): "
              f"{head[f'output_feedback_successes_of_{n}']}/{n} swing-ups succeed, "
              f"{head[f'output_feedback_with_reidentification_successes_of_{n}']}/{n} with "
              "re-identification. The estimator's RMS error per state over each run "
@@ -210,8 +212,8 @@ def _output_feedback_section(rep, res, nom, task, estimation_figure):
     hidden = [i for i in range(len(task.state_names)) if i not in task.outputs]
     rep.figure(estimation_figure(of["run"], of["estimates"], of["stds"], task.state_names,
                                  states=hidden), "estimation.png",
-               "Output feedback on the nominal system: the unmeasured rates, the EKF's "
-               "estimates and their ±2σ band")
+               "Output feedback on the nominal system: the EKF's error on the unmeasured "
+               "rates within its own ±2σ band (the true rate in grey)")
 
 
 def _identification_section(rep, res, learning, learning_figure):

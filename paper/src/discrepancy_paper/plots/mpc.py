@@ -118,19 +118,24 @@ def solve_time_figure(times: dict, *, period):
 
 
 def estimation_figure(run, estimates, stds, names, *, states):
-    """The true ``states`` of a closed-loop run (at the control samples), a filter's
-    estimates and their ±2σ band, one panel per state; error RMS in each title."""
+    """A filter's estimation error on ``states`` of a closed-loop run (at the control
+    samples) within its own ±2σ band, one panel per state, beside the true state (right
+    axis, grey) for scale; RMS error in each title."""
     fig, axes = plt.subplots(len(states), 1, figsize=(9, 1.9 * len(states)), sharex=True,
                              squeeze=False)
     t = run.t[:len(estimates)]
     for ax, i in zip(axes[:, 0], states, strict=True):
-        true, est, band = run.x[:len(estimates), i], estimates[:, i], 2 * stds[:, i]
-        ax.fill_between(t, est - band, est + band, color="C1", alpha=0.25, lw=0,
-                        label="estimate ± 2σ")
-        ax.plot(t, true, color="k", lw=1.0, label="true")
-        ax.plot(t, est, color="C1", lw=0.9, ls="--", label="estimate")
-        rms = float(np.sqrt(np.mean((est - true) ** 2)))
-        ax.set_title(f"{names[i]}: RMS error {rms:.3g}", fontsize=9)
+        true = run.x[:len(estimates), i]
+        error, band = estimates[:, i] - true, 2 * stds[:, i]
+        ax.fill_between(t, -band, band, color="C1", alpha=0.25, lw=0, label="±2σ (the filter's)")
+        ax.plot(t, error, color="C1", lw=0.9, label="estimate − true")
+        twin = ax.twinx()
+        twin.plot(t, true, color="0.6", lw=0.8)
+        twin.set_ylabel(f"{names[i]} (true)", color="0.5", fontsize=8)
+        rms = float(np.sqrt(np.mean(error ** 2)))
+        ax.set_title(f"{names[i]}: RMS error {rms:.3g}, {np.mean(np.abs(error) <= band):.0%} "
+                     "of samples within ±2σ", fontsize=9)
+        ax.set_ylabel("error")
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("t (s)")
