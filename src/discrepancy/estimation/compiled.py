@@ -92,21 +92,28 @@ class CompiledSteps:
         self.block = step.mapaccum("filter", BLOCK)
 
     def run(self, x0, P0, data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Outputs ``(m, out)`` of every step over ``data`` ``(m, data)`` and the carry
-        after each ``(m, n + n²)``; padding steps (``h = 0``, nothing measured) change
-        nothing."""
-        m = len(data)
-        padded = -(-m // BLOCK) * BLOCK
-        columns = np.zeros((data.shape[1], padded))
-        columns[:, :m] = data.T
-        carry = np.concatenate([x0, P0.ravel(order="F")])
-        out = np.full((padded, layout(self.n, self.k, self.r, self.substeps)["out"]), np.nan)
-        carries = np.full((padded, len(carry)), np.nan)
-        for i in range(0, padded, BLOCK):
-            after, block = self.block(carry, columns[:, i:i + BLOCK])
-            out[i:i + BLOCK] = np.asarray(block).T
-            carries[i:i + BLOCK] = np.asarray(after).T
-            carry = carries[i + BLOCK - 1]
-            if not np.all(np.isfinite(carry)):
-                break
-        return out[:m], carries[:m]
+        """See :func:`run_blocks`."""
+        return run_blocks(self.block, x0, P0, data,
+                          layout(self.n, self.k, self.r, self.substeps)["out"])
+
+
+def run_blocks(block, x0, P0, data: np.ndarray, width: int, extra=()):
+    """Outputs ``(m, width)`` of every step of ``block`` (a ``mapaccum`` of ``BLOCK`` steps,
+    called with the carry, the data columns and ``extra``) over ``data`` ``(m, data)``, and
+    the carry after each ``(m, n + n²)``; padding steps (``h = 0``, nothing measured)
+    change nothing. Stops at a carry that is not finite (the rest stays NaN)."""
+    m = len(data)
+    padded = -(-m // BLOCK) * BLOCK
+    columns = np.zeros((data.shape[1], padded))
+    columns[:, :m] = data.T
+    carry = np.concatenate([x0, P0.ravel(order="F")])
+    out = np.full((padded, width), np.nan)
+    carries = np.full((padded, len(carry)), np.nan)
+    for i in range(0, padded, BLOCK):
+        after, outputs = block(carry, columns[:, i:i + BLOCK], *extra)
+        out[i:i + BLOCK] = np.asarray(outputs).T
+        carries[i:i + BLOCK] = np.asarray(after).T
+        carry = carries[i + BLOCK - 1]
+        if not np.all(np.isfinite(carry)):
+            break
+    return out[:m], carries[:m]

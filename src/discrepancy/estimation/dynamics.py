@@ -70,6 +70,8 @@ def dynamics_of(model, *, state_names=None, input_names=None, discrete_time=None
     ``"auto"`` (CasADi when installed and the model can be written in it)."""
     from ..models import DiscrepancyModel
 
+    if isinstance(model, Dynamics):           # built by the library (prediction-error fits)
+        return model
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(map(repr, BACKENDS))}; got "
                              f"{backend!r}")
