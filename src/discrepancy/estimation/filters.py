@@ -113,8 +113,8 @@ class KalmanFilter:
         y = np.where(w > 0, y, 0.0)
         if self._compiled is not None:
             n, k = self.dynamics.n, self.measurement.k
-            out = np.asarray(self._compiled.update(np.concatenate(
-                [state.x, state.P.ravel(order="F"), y, w]))).ravel()
+            out = self._compiled.update(np.concatenate([state.x, state.P.ravel(order="F"), y,
+                                                        w]))
             x, P = out[:n], out[n:n + n * n].reshape(n, n, order="F")
             e, S = out[n + n * n:n + n * n + k], out[n + n * n + k:-1].reshape(k, k, order="F")
             nll = out[-1]
@@ -141,8 +141,8 @@ class KalmanFilter:
         if self._compiled is not None:
             n = self.dynamics.n
             stages = np.repeat(u, width) if r else np.zeros(0)
-            out = np.asarray(self._compiled.predict(np.concatenate(
-                [state.x, state.P.ravel(order="F"), stages, [h]]))).ravel()
+            out = self._compiled.predict(np.concatenate([state.x, state.P.ravel(order="F"),
+                                                         stages, [h]]))
             x, P = out[:n], out[n:n + n * n].reshape(n, n, order="F")
         else:
             stages = np.repeat(u[None, :], width, 0) if r else None
