@@ -107,7 +107,7 @@ CASES = [
     Case("estimation", "fit without outputs", lambda: pem(outputs=None), raises(ParameterError, r"outputs is required")),
     Case("estimation", "fit on a record too short", lambda: pem(Y[:50]), raises(DataError, r"too short for a prediction-error fit \(at least 80")),
     Case("estimation", "fit with holdout 0.9", lambda: pem(holdout=0.9), raises(ParameterError, r"holdout must be a fraction in \[0.05, 0.5\]")),
-    Case("estimation", "fit with a process covariance", lambda: pem(process_noise=np.eye(2)), raises(ShapeError, r"process_noise must be 2 standard deviations .* for a prediction-error fit")),
+    Case("estimation", "fit with a process covariance", lambda: pem(process_noise=np.eye(2)), raises(ShapeError, r"process_noise must be 2 standard deviations \(one per channel, NaN for those to fit\) for a prediction-error fit")),
     Case("estimation", "fit with an unknown disturbance", lambda: pem(disturbances=["x9"]), raises(UnknownNameError, r"disturbances\[0\] = 'x9' is not a state")),
     Case("estimation", "fit with u positional", lambda: pem_model().fit_prediction_error(Y, 0.05, np.zeros((100, 1))), raises(ParameterError, r"fit_prediction_error: arguments after t .* must be passed by name")),
     Case("estimation", "kalman_filter of an unknown kind", lambda: pem_model().fit(np.c_[Y, Y], 0.05, u=np.zeros((100, 1))).kalman_filter("pf"), raises(ParameterError, r"kind must be 'ekf' or 'ukf'; got 'pf'")),

@@ -56,15 +56,20 @@ def terms(m):
     return {names[j]: float(c) for j, c in enumerate(m.coef_[1]) if c != 0}
 
 
-def test_known_terms_and_noise_levels_are_recovered():
+@pytest.mark.parametrize("pos_noise", [None, 0.0])
+def test_known_terms_and_noise_levels_are_recovered(pos_noise):
     t, u, y, _, _ = oscillator(0, T=100.0, q=0.05)
+    y[5::10] = np.nan                                # a tenth of the samples missing
     m = model(dc.CustomLibrary([VEL, POS ** 3]), optimizer=dc.STLSQ(threshold=1e-6))
-    m.fit_prediction_error(y, t, u=u, outputs=["pos"], u_hold="zoh", substeps=2)
+    noise = None if pos_noise is None else [pos_noise, np.nan]   # NaN: fitted
+    m.fit_prediction_error(y, t, u=u, outputs=["pos"], u_hold="zoh", substeps=2,
+                           process_noise=noise)
     found = terms(m)
     assert set(found) == set(TRUE)
     for name, value in TRUE.items():
         assert found[name] == pytest.approx(value, rel=0.05), found
-    assert m.process_noise_["pos"] == 0.0                       # an exact equation
+    assert m.process_noise_["pos"] < 1e-3 and (pos_noise is None or
+                                               m.process_noise_["pos"] == 0.0)
     assert m.process_noise_["vel"] == pytest.approx(0.05, rel=0.2)
     assert m.measurement_noise_["pos"] == pytest.approx(0.01, rel=0.1)
     assert m.x0_.shape == (2,) and abs(m.x0_[0]) < 0.03
@@ -100,3 +105,42 @@ def test_a_numeric_threshold_drops_small_terms():
     m.fit_prediction_error(y, t, u=u, outputs=["pos"], u_hold="zoh", substeps=2)
     assert set(terms(m)) == set(TRUE)
     assert m.prediction_error_.path == [] and m.prediction_error_.chosen is None
+
+
+def lorenz_record(seed=0, m=2000, dt=0.01, q=0.5, r=0.1):
+    """20 s of the chaotic Lorenz system with process noise on y and z; x, y measured."""
+    rng = np.random.default_rng(seed)
+
+    def f(s):
+        return np.array([10 * (s[1] - s[0]), s[0] * (28 - s[2]) - s[1],
+                         s[0] * s[1] - 8 / 3 * s[2]])
+
+    s, h, out = np.array([1.0, 1.0, 20.0]), dt / 10, []
+    for k in range(300 + m):
+        if k >= 300:
+            out.append(s.copy())
+        for _ in range(10):
+            k1 = f(s)
+            k2 = f(s + h / 2 * k1)
+            k3 = f(s + h / 2 * k2)
+            s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + f(s + h * k3))
+            s[1:] += q * np.sqrt(h) * rng.standard_normal(2)
+    return np.arange(m) * dt, np.array(out)[:, :2] + r * rng.standard_normal((m, 2))
+
+
+@pytest.mark.slow
+def test_a_chaotic_system_with_a_hidden_state():
+    """Lorenz with sigma = 8 in the prior (truth 10) and z unmeasured: a record 20 s long
+    (about 20 Lyapunov times, beyond any free simulation) gives x' = prior - 2 x + 2 y."""
+    t, y = lorenz_record()
+    x_, y_, z_ = (symbol(n) for n in "xyz")
+    m = dc.DiscrepancyModel(prior=[8 * (y_ - x_), x_ * (28 - z_) - y_, x_ * y_ - 8 * z_ / 3],
+                            state_names=["x", "y", "z"],
+                            feature_library=dc.PolynomialLibrary(1, variables=["x", "y"]),
+                            constraints=dc.Constraints(exact_equations=["y", "z"]))
+    m.fit_prediction_error(y, t, outputs=["x", "y"], substeps=2)
+    names = m.get_feature_names()
+    found = {names[j]: float(c) for j, c in enumerate(m.coef_[0]) if c != 0}
+    assert set(found) == {"x", "y"}, found
+    assert found == pytest.approx({"x": -2.0, "y": 2.0}, rel=0.02)
+    assert m.measurement_noise_["y"] == pytest.approx(0.1, rel=0.25)

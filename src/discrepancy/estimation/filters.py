@@ -45,7 +45,7 @@ from .disturbances import with_disturbances
 from .dynamics import check_state, dynamics_of
 from .measurement import Measurement
 from .noise import covariance, initial_covariance
-from .records import FilterRecord, assemble_result
+from .records import FilterRecord, assemble_result, record_inputs
 from .results import FilterResult, FilterState
 from .smoother import rts_smooth
 
@@ -162,12 +162,8 @@ class KalmanFilter:
         own for unmeasured states of other units. Returns a :class:`FilterResult`; a list of
         records (``y``, ``t``, ``u`` lists) gives a list."""
         if isinstance(y, (list, tuple)):
-            from ..data.trajectory import _as_list
-
-            ts, us = _as_list("t", t, len(y), broadcast=True), \
-                _as_list("u", u, len(y), broadcast=False)
             return [self.filter(yi, ti, ui, x0=x0, P0=P0) for yi, ti, ui in
-                    zip(y, ts, us, strict=True)]
+                    zip(*record_inputs(y, t, u), strict=True)]
         record = FilterRecord(self, y, t, u)
         x0, P0 = record.initial_belief(self, x0, P0)
         if self._compiled is not None:

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..data.trajectory import as_trajectories
+from ..data.validation import as_float_array
 from ..errors import ParameterError, ShapeError
 from .disturbances import disturbance_names, disturbed_equations
 from .measurement import Measurement
@@ -21,7 +21,7 @@ from .prediction_error import (
     record_spec,
     rows_of,
 )
-from .records import FilterRecord
+from .records import FilterRecord, record_inputs
 from .smoother import rts_smooth
 from .support_path import SupportScore, choose, drop_least
 
@@ -59,12 +59,12 @@ def fit_prediction_error(model, y, t, u, *, outputs, disturbances, process_noise
     from ..models.output_fit import _allowed, _check_options
 
     _check_options(max_terms, holdout, tolerance)
-    trajectories = as_trajectories(y, t, u, x_name="y")
-    r = 0 if trajectories[0].u is None else trajectories[0].u.shape[1]
+    ys, ts, us = record_inputs(y, t, u)
+    r = 0 if us[0] is None else (1 if np.ndim(us[0]) == 1 else int(np.shape(us[0])[1]))
     setup = model.make_setup(n_states_of(model, x0), r)
     measurement = Measurement(outputs, list(setup.state_names))
     equations = disturbed_equations(disturbances, list(setup.state_names))
-    problem = _problem(setup, measurement, equations, trajectories, process_noise,
+    problem = _problem(setup, measurement, equations, (ys, ts, us), process_noise,
                        measurement_noise, x0, u_hold, substeps)
     allowed = _allowed(setup)
     train, test = rows_of(problem.records, holdout)
@@ -88,7 +88,7 @@ def fit_prediction_error(model, y, t, u, *, outputs, disturbances, process_noise
                           substeps)
 
 
-def _problem(setup, measurement, equations, trajectories, process_noise, measurement_noise,
+def _problem(setup, measurement, equations, data, process_noise, measurement_noise,
              x0, u_hold, substeps) -> PredictionErrorProblem:
     from types import SimpleNamespace
 
@@ -99,19 +99,12 @@ def _problem(setup, measurement, equations, trajectories, process_noise, measure
     dynamics = SimpleNamespace(n=N, r=setup.n_inputs, input_names=list(setup.input_names),
                                discrete_time=False, state_names=names)
     spec = record_spec(dynamics, measurement, substeps, check_hold(u_hold), np.ones(k))
-    records = [FilterRecord(spec, tr.x, tr.t, tr.u) for tr in trajectories]
+    records = [FilterRecord(spec, *record) for record in zip(*data, strict=True)]
     check_records(records)
-    if measurement_noise is None:
-        r0, r_free = measurement_noise_guess(records), np.ones(k, bool)
-    else:
-        r0, r_free = _stds("measurement_noise", measurement_noise, k, True), np.zeros(k, bool)
+    r0, r_free = _levels("measurement_noise", measurement_noise, k, definite=True)
+    r0 = np.where(r_free, measurement_noise_guess(records), r0)
     spec.R = np.diag(r0 ** 2)
-    exact = _exact_states(setup)
-    if process_noise is None:
-        q_free = np.array([i not in exact for i in range(N)])
-        q0 = np.where(q_free, 1.0, 0.0)
-    else:
-        q0, q_free = _stds("process_noise", process_noise, N, False), np.zeros(N, bool)
+    q0, q_free = _levels("process_noise", process_noise, N, definite=False)
     problem = PredictionErrorProblem(setup, measurement, equations, records, spec, q_free,
                                      r_free, q0, r0)
     if x0 is not None:
@@ -120,21 +113,22 @@ def _problem(setup, measurement, equations, trajectories, process_noise, measure
     return problem
 
 
-def _stds(name, value, size, definite) -> np.ndarray:
-    """Standard deviations ``(size,)`` of a noise given as stds (a fit takes no
-    correlations)."""
-    if np.ndim(value) == 2:
-        raise ShapeError(f"{name} must be {size} standard deviations (one per channel) for "
-                         "a prediction-error fit; correlated noise is not fitted")
-    return np.sqrt(np.diag(covariance(name, value, size, definite=definite)))
-
-
-def _exact_states(setup) -> set[int]:
-    constraints = getattr(setup.optimizer, "constraints", None)
-    if constraints is None:
-        return set()
-    exact = getattr(constraints, "allowed", None)
-    return {i for i in range(setup.n_states) if exact is not None and not exact[i].any()}
+def _levels(name, value, size, *, definite) -> tuple[np.ndarray, np.ndarray]:
+    """``(stds (size,), fitted (size,) bool)`` from ``None`` (fit all) or stds, NaN for
+    those to fit (a fit takes no correlations)."""
+    if value is None:
+        return np.ones(size), np.ones(size, bool)
+    arr = as_float_array(name, value)
+    if arr.ndim == 2:
+        raise ShapeError(f"{name} must be {size} standard deviations (one per channel, NaN "
+                         "for those to fit) for a prediction-error fit; correlated noise is "
+                         "not fitted")
+    arr = np.broadcast_to(arr, (size,)) if arr.ndim == 0 else arr
+    if arr.shape != (size,):
+        covariance(name, arr, size, definite=definite)           # raises, naming the sizes
+    fitted = np.isnan(arr)
+    fixed = covariance(name, np.where(fitted, 1.0, arr), size, definite=definite)
+    return np.sqrt(np.diag(fixed)), fitted
 
 
 def _set_initial_states(problem, x0, n):

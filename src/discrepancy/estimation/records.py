@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..data.trajectory import _as_list
 from ..data.validation import as_float_array, check_array, check_times
 from ..errors import ConvergenceError, DataError, ShapeError
 from ..models.casadi_form import stage_columns
@@ -15,6 +16,18 @@ from .results import FilterResult
 
 #: default prior variance of unmeasured states, relative to the largest output variance
 BROAD = 100.0
+
+
+def record_inputs(y, t, u) -> tuple[list, list, list]:
+    """``(ys, ts, us)`` lists for one record or a list of records (a step ``t`` and a
+    missing ``u`` are shared)."""
+    if not isinstance(y, (list, tuple)):
+        return [y], [t], [u]
+    if not y:
+        raise ShapeError("y must hold at least one record; got an empty list")
+    k = len(y)
+    ts = _as_list("t", t, k, broadcast=not isinstance(t, (list, tuple)) and np.ndim(t) == 0)
+    return list(y), ts, _as_list("u", u, k, broadcast=u is None)
 
 
 class FilterRecord:

@@ -32,10 +32,10 @@ class PredictionErrorMethods:
             disturbances: states (names or indices) whose equations get an unmeasured
                 random-walk force ``d_<name>``, estimated as an extra state with a fitted
                 intensity (a push, a load change, a slope the model does not know).
-            process_noise: std per state and disturbance (per √s) to use instead of fitting
-                them; by default fitted for every state except those ``constraints`` make
-                exact (kinematic equations), which get none.
-            measurement_noise: std per output to use instead of fitting them.
+            process_noise: std per state and then per disturbance (per √s) to use instead of
+                fitting them, NaN for those to fit (e.g. ``[0, np.nan]`` for a kinematic
+                equation without noise); by default all are fitted.
+            measurement_noise: std per output to use instead of fitting them (NaN: fit).
             x0: the initial state ``(n,)`` (one per record) the filter starts from; by
                 default measured states at their first sample and the others at 0, with a
                 broad uncertainty (the first samples do not count in the fit).
