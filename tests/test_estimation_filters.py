@@ -225,3 +225,11 @@ def test_a_fitted_model_filters_as_its_own_equations():
     assert np.allclose(fitted.x, exact.x, atol=1e-6)
     velocity_error = fitted.x[50:, 1] - np.cos(t[::5][50:])           # the unmeasured state
     assert np.sqrt(np.mean(velocity_error ** 2)) < 0.03
+
+
+def test_a_list_of_records_gives_a_list_of_runs():
+    (y1, u1), (y2, u2) = linear_record(50, seed=7), linear_record(80, seed=8)
+    kf = make()
+    runs = kf.filter([y1, y2], DT, u=[u1, u2], x0=X0, P0=P0)
+    assert len(runs) == 2 and runs[1].x.shape == (80, 2)
+    assert np.array_equal(runs[1].x, kf.filter(y2, DT, u=u2, x0=X0, P0=P0).x)

@@ -81,10 +81,12 @@ class CompiledSteps:
             alone = km.ukf_predict(ops, x, P, U, h, ca.DM(Q), substeps,
                                    dynamics.discrete_time, weights)
             update = km.ukf_update(ops, x, P, sym["y"], sym["w"], ca.DM(R), weights)
-        self.predict = ca.Function("predict", [ca.vertcat(x, ca.vec(P), U, h)],
-                                   [ca.vertcat(alone[0], ca.vec(alone[1]), ca.vec(alone[2]))])
-        self.update = ca.Function("update", [ca.vertcat(x, ca.vec(P), sym["y"], sym["w"])],
-                                  [flat_update(ca, update)])
+        self.predict = fast_call(ca, ca.Function(
+            "predict", [ca.vertcat(x, ca.vec(P), U, h)],
+            [ca.densify(ca.vertcat(alone[0], ca.vec(alone[1]), ca.vec(alone[2])))]))
+        self.update = fast_call(ca, ca.Function(
+            "update", [ca.vertcat(x, ca.vec(P), sym["y"], sym["w"])],
+            [ca.densify(flat_update(ca, update))]))
         xp, Pp, C = sym["predict"]
         step = ca.Function("step", [sym["carry"], sym["data"]],
                            [ca.vertcat(xp, ca.vec(Pp)),
@@ -92,21 +94,47 @@ class CompiledSteps:
         self.block = step.mapaccum("filter", BLOCK)
 
     def run(self, x0, P0, data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Outputs ``(m, out)`` of every step over ``data`` ``(m, data)`` and the carry
-        after each ``(m, n + n²)``; padding steps (``h = 0``, nothing measured) change
-        nothing."""
-        m = len(data)
-        padded = -(-m // BLOCK) * BLOCK
-        columns = np.zeros((data.shape[1], padded))
-        columns[:, :m] = data.T
-        carry = np.concatenate([x0, P0.ravel(order="F")])
-        out = np.full((padded, layout(self.n, self.k, self.r, self.substeps)["out"]), np.nan)
-        carries = np.full((padded, len(carry)), np.nan)
-        for i in range(0, padded, BLOCK):
-            after, block = self.block(carry, columns[:, i:i + BLOCK])
-            out[i:i + BLOCK] = np.asarray(block).T
-            carries[i:i + BLOCK] = np.asarray(after).T
-            carry = carries[i + BLOCK - 1]
-            if not np.all(np.isfinite(carry)):
-                break
-        return out[:m], carries[:m]
+        """See :func:`run_blocks`."""
+        return run_blocks(self.block, x0, P0, data,
+                          layout(self.n, self.k, self.r, self.substeps)["out"])
+
+
+def fast_call(ca, function):
+    """``call(flat (in,)) -> (out,)`` through CasADi's buffer interface: the arrays are
+    bound once, so a call costs about a microsecond of overhead instead of the tens of a
+    ``Function.__call__`` (which converts its arguments each time). Not thread-safe: one
+    filter object per thread."""
+    buffer, evaluate = function.buffer()
+    arg, res = np.zeros(function.nnz_in(0)), np.zeros(function.nnz_out(0))
+    buffer.set_arg(0, memoryview(arg))
+    buffer.set_res(0, memoryview(res))
+
+    def call(values):
+        arg[:] = values
+        evaluate()
+        return res.copy()
+
+    call.keep = (function, buffer, evaluate, arg, res)   # the buffer must outlive its calls
+    return call
+
+
+def run_blocks(block, x0, P0, data: np.ndarray, width: int, extra=()):
+    """Outputs ``(m, width)`` of every step of ``block`` (a ``mapaccum`` of ``BLOCK`` steps,
+    called with the carry, the data columns and ``extra``) over ``data`` ``(m, data)``, and
+    the carry after each ``(m, n + n²)``; padding steps (``h = 0``, nothing measured)
+    change nothing. Stops at a carry that is not finite (the rest stays NaN)."""
+    m = len(data)
+    padded = -(-m // BLOCK) * BLOCK
+    columns = np.zeros((data.shape[1], padded))
+    columns[:, :m] = data.T
+    carry = np.concatenate([x0, P0.ravel(order="F")])
+    out = np.full((padded, width), np.nan)
+    carries = np.full((padded, len(carry)), np.nan)
+    for i in range(0, padded, BLOCK):
+        after, outputs = block(carry, columns[:, i:i + BLOCK], *extra)
+        out[i:i + BLOCK] = np.asarray(outputs).T
+        carries[i:i + BLOCK] = np.asarray(after).T
+        carry = carries[i + BLOCK - 1]
+        if not np.all(np.isfinite(carry)):
+            break
+    return out[:m], carries[:m]

@@ -68,12 +68,12 @@ def dynamics_of(model, *, state_names=None, input_names=None, discrete_time=None
     (default ``x1 ...`` for ``n_states`` states, no inputs); a fitted model brings its own.
     ``backend``: ``"casadi"`` (required: an error when it cannot be used), ``"numpy"`` or
     ``"auto"`` (CasADi when installed and the model can be written in it)."""
-    from ..models import DiscrepancyModel
-
+    if isinstance(model, Dynamics):           # built by the library (prediction-error fits)
+        return model
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(map(repr, BACKENDS))}; got "
                              f"{backend!r}")
-    if isinstance(model, DiscrepancyModel):
+    if hasattr(model, "fit_prediction_error"):     # a DiscrepancyModel (not imported: a cycle)
         model.check_is_fitted()
         if state_names is not None or input_names is not None:
             raise ParameterError("state_names and input_names come from the fitted model; "

@@ -17,7 +17,10 @@ callable prior ``f(x (m, n), u (m, r)) -> (m, n)`` or a list of sympy expression
 indices) or sympy expressions of them. Noise: ``process_noise`` is the intensity of white
 noise on ``x'`` (a std per state in units per √second, or a covariance ``(n, n)`` per
 second; per step for a discrete-time model); ``measurement_noise`` a std per output (or a
-covariance ``(k, k)``), which must be positive.
+covariance ``(k, k)``), which must be positive. ``disturbances``: states (names or indices)
+whose equations also get an unmeasured random-walk force ``d_<name>``, estimated as an extra
+state (its process noise is the last entries of ``process_noise``; see
+:mod:`~discrepancy.estimation.disturbances`).
 
 Between samples the model is stepped by RK4 (``substeps`` per interval) with the input held
 as ``u_hold`` says (as in ``fit_outputs`` and ``simulate(method="rk4")``); the online
@@ -38,10 +41,11 @@ from ..errors import ConvergenceError, DataError, ShapeError
 from ..models.inputs import check_hold
 from . import kalman_math as km
 from .backends import NumpyOps
+from .disturbances import with_disturbances
 from .dynamics import check_state, dynamics_of
 from .measurement import Measurement
 from .noise import covariance, initial_covariance
-from .records import FilterRecord, assemble_result
+from .records import FilterRecord, assemble_result, record_inputs
 from .results import FilterResult, FilterState
 from .smoother import rts_smooth
 
@@ -54,14 +58,17 @@ class KalmanFilter:
 
     def __init__(self, model, *, outputs, process_noise, measurement_noise, substeps: int = 4,
                  u_hold: str = "zoh", state_names=None, input_names=None, discrete_time=None,
-                 backend: str = "auto"):
+                 disturbances=None, backend: str = "auto"):
         validate_params(type(self).__name__, {"substeps": substeps},
                         {"substeps": [Interval(Integral, 1, 1000)]})
         self.substeps, self.u_hold = int(substeps), check_hold(u_hold)
         size = np.shape(process_noise)[0] if np.ndim(process_noise) else None
-        self.dynamics = dynamics_of(model, state_names=state_names, input_names=input_names,
-                                    discrete_time=discrete_time, n_states=size,
-                                    backend=backend)
+        n_disturbed = 0 if disturbances is None else \
+            (1 if isinstance(disturbances, (str, int)) else len(disturbances))
+        self.dynamics = with_disturbances(dynamics_of(
+            model, state_names=state_names, input_names=input_names,
+            discrete_time=discrete_time, backend=backend,
+            n_states=None if size is None else size - n_disturbed), disturbances)
         n = self.dynamics.n
         self.measurement = Measurement(outputs, list(self.dynamics.state_names))
         unit = "per step" if self.dynamics.discrete_time else "per second"
@@ -106,8 +113,8 @@ class KalmanFilter:
         y = np.where(w > 0, y, 0.0)
         if self._compiled is not None:
             n, k = self.dynamics.n, self.measurement.k
-            out = np.asarray(self._compiled.update(np.concatenate(
-                [state.x, state.P.ravel(order="F"), y, w]))).ravel()
+            out = self._compiled.update(np.concatenate([state.x, state.P.ravel(order="F"), y,
+                                                        w]))
             x, P = out[:n], out[n:n + n * n].reshape(n, n, order="F")
             e, S = out[n + n * n:n + n * n + k], out[n + n * n + k:-1].reshape(k, k, order="F")
             nll = out[-1]
@@ -134,8 +141,8 @@ class KalmanFilter:
         if self._compiled is not None:
             n = self.dynamics.n
             stages = np.repeat(u, width) if r else np.zeros(0)
-            out = np.asarray(self._compiled.predict(np.concatenate(
-                [state.x, state.P.ravel(order="F"), stages, [h]]))).ravel()
+            out = self._compiled.predict(np.concatenate([state.x, state.P.ravel(order="F"),
+                                                         stages, [h]]))
             x, P = out[:n], out[n:n + n * n].reshape(n, n, order="F")
         else:
             stages = np.repeat(u[None, :], width, 0) if r else None
@@ -155,19 +162,16 @@ class KalmanFilter:
         own for unmeasured states of other units. Returns a :class:`FilterResult`; a list of
         records (``y``, ``t``, ``u`` lists) gives a list."""
         if isinstance(y, (list, tuple)):
-            from ..data.trajectory import _as_list
-
-            ts, us = _as_list("t", t, len(y), broadcast=True), \
-                _as_list("u", u, len(y), broadcast=False)
             return [self.filter(yi, ti, ui, x0=x0, P0=P0) for yi, ti, ui in
-                    zip(y, ts, us, strict=True)]
+                    zip(*record_inputs(y, t, u), strict=True)]
         record = FilterRecord(self, y, t, u)
         x0, P0 = record.initial_belief(self, x0, P0)
         if self._compiled is not None:
             out, carries = self._compiled.run(x0, P0, record.data())
         else:
             out, carries = self._numpy_run(record, x0, P0)
-        return assemble_result(self, record, x0, P0, out, carries)
+        return assemble_result((self.state_names, self.output_names), record, x0, P0, out,
+                               carries)
 
     def smooth(self, result: FilterResult) -> tuple[np.ndarray, np.ndarray]:
         """Rauch–Tung–Striebel smoothed means ``(m, n)`` and covariances ``(m, n, n)`` of a
@@ -229,8 +233,8 @@ class UnscentedKalmanFilter(KalmanFilter):
 
     def __init__(self, model, *, outputs, process_noise, measurement_noise, substeps: int = 4,
                  u_hold: str = "zoh", state_names=None, input_names=None, discrete_time=None,
-                 backend: str = "auto", alpha: float = 1.0, beta: float = 2.0,
-                 kappa: float = 0.0):
+                 disturbances=None, backend: str = "auto", alpha: float = 1.0,
+                 beta: float = 2.0, kappa: float = 0.0):
         validate_params("UnscentedKalmanFilter", {"alpha": alpha, "beta": beta, "kappa": kappa},
                         {"alpha": [Interval(Real, 0, 10, closed="right")],
                          "beta": [Interval(Real, 0, 10)], "kappa": [Interval(Real, 0, 100)]})
@@ -238,7 +242,8 @@ class UnscentedKalmanFilter(KalmanFilter):
         super().__init__(model, outputs=outputs, process_noise=process_noise,
                          measurement_noise=measurement_noise, substeps=substeps, u_hold=u_hold,
                          state_names=state_names, input_names=input_names,
-                         discrete_time=discrete_time, backend=backend)
+                         discrete_time=discrete_time, disturbances=disturbances,
+                         backend=backend)
 
     def _sigma_weights(self):
         return km.unscented_weights(self.dynamics.n, self.alpha, self.beta, self.kappa)

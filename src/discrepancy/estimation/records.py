@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..data.trajectory import _as_list
 from ..data.validation import as_float_array, check_array, check_times
 from ..errors import ConvergenceError, DataError, ShapeError
 from ..models.casadi_form import stage_columns
@@ -17,9 +18,23 @@ from .results import FilterResult
 BROAD = 100.0
 
 
+def record_inputs(y, t, u) -> tuple[list, list, list]:
+    """``(ys, ts, us)`` lists for one record or a list of records (a step ``t`` and a
+    missing ``u`` are shared)."""
+    if not isinstance(y, (list, tuple)):
+        return [y], [t], [u]
+    if not y:
+        raise ShapeError("y must hold at least one record; got an empty list")
+    k = len(y)
+    ts = _as_list("t", t, k, broadcast=not isinstance(t, (list, tuple)) and np.ndim(t) == 0)
+    return list(y), ts, _as_list("u", u, k, broadcast=u is None)
+
+
 class FilterRecord:
-    """``y`` ``(m, k)`` with its mask, times, step lengths ``h`` ``(m - 1,)`` and stage
-    inputs ``(m - 1, 2S + 1, r)`` (``None`` without inputs)."""
+    """``y`` ``(m, k)`` with its mask ``w``, times, step lengths ``h`` ``(m - 1,)``, inputs
+    ``u`` and their values at the stage times ``(m - 1, 2S + 1, r)`` (``None`` without
+    inputs). ``kalman``: a filter, or anything with its ``dynamics``, ``measurement``,
+    ``substeps``, ``u_hold`` and ``R`` (a prediction-error fit's settings)."""
 
     def __init__(self, kalman, y, t, u):
         dyn, k = kalman.dynamics, kalman.measurement.k
@@ -53,6 +68,7 @@ class FilterRecord:
 
     def _stages(self, kalman, u):
         r = kalman.dynamics.r
+        self.u = None
         if not r:
             if u is not None:
                 raise ShapeError("u was given but the model has no inputs")
@@ -60,7 +76,7 @@ class FilterRecord:
         if u is None:
             raise ShapeError(f"u is required: the model has {r} inputs "
                              f"{list(kalman.dynamics.input_names)}")
-        u = check_array("u", u, n_rows=self.m, n_cols=r, allow_1d=True)
+        u = self.u = check_array("u", u, n_rows=self.m, n_cols=r, allow_1d=True)
         if self.m < 2:
             return np.zeros((0, 2 * kalman.substeps + 1, r))
         return stage_inputs(u, self.t, r, kalman.substeps, hold=kalman.u_hold)
@@ -94,11 +110,12 @@ class FilterRecord:
         return x0, initial_covariance(P0, n)
 
 
-def assemble_result(kalman, record, x0, P0, out, carries) -> FilterResult:
+def assemble_result(names, record, x0, P0, out, carries) -> FilterResult:
     """The :class:`FilterResult` of the flat step outputs ``(m, out)`` and the predictions
-    that followed each step ``(m, n + n²)``; a filter that failed (non-finite values)
+    that followed each step ``(m, n + n²)``; ``names``: ``(state names, output names)``;
+    ``record``: has ``t`` and the mask ``w``. A filter that failed (non-finite values)
     raises ConvergenceError naming the sample."""
-    n, k = kalman.dynamics.n, kalman.measurement.k
+    n, k = len(names[0]), len(names[1])
     bad = ~np.all(np.isfinite(out[:, :n + n * n + k + k * k + 1]), axis=1)
     bad[:-1] |= ~np.all(np.isfinite(carries[:-1]), axis=1)
     if bad.any():
@@ -113,7 +130,7 @@ def assemble_result(kalman, record, x0, P0, out, carries) -> FilterResult:
     P_pred = np.concatenate([P0[None], _matrices(carries[:-1, n:], n)])
     return FilterResult(record.t, x, _matrices(P, n), x_pred, P_pred, e, _matrices(S, k),
                         float(-nll.sum()), _matrices(C, n)[:-1], record.w > 0,
-                        kalman.state_names, kalman.output_names, -nll[:, 0])
+                        list(names[0]), list(names[1]), -nll[:, 0])
 
 
 def _matrices(flat: np.ndarray, n: int) -> np.ndarray:
