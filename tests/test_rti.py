@@ -1,14 +1,12 @@
-"""Real-time iteration MPC: exact on linear systems (the LQR), converges to IPOPT's optimum on
-a nonlinear one, keeps the limits in closed loop, and swings up a pendulum on a cart whose
-plant is scipy's integration of the system's own numpy equations."""
+"""Real-time iteration MPC: exact on linear systems (the LQR) and converging to IPOPT's optimum
+on a nonlinear one (closed loops with limits and a swing-up: tests/test_mpc.py, both solvers)."""
 import casadi as ca
 import numpy as np
 import pytest
 from scipy.linalg import solve_discrete_are
 
-from discrepancy.control import MPC, Limits, closed_loop, plan_trajectory, swing_up_errors
+from discrepancy.control import MPC, Limits
 from discrepancy.errors import ParameterError
-from discrepancy.systems import PendulumOnCart
 
 
 def double_integrator():
@@ -58,47 +56,6 @@ def test_repeated_steps_converge_to_the_ipopt_optimum_with_active_limits():
     np.testing.assert_allclose(rti.u, exact.u, atol=1e-5)
     np.testing.assert_allclose(rti.x, exact.x, atol=1e-6)
     assert rti.objective == pytest.approx(exact.objective, rel=1e-5)   # slacks weigh 1e4
-
-
-def test_closed_loop_keeps_the_limits_against_a_reference_beyond_them():
-    """Sent to x = 2 through a wall at x = 1 with |u| <= 1 and |du/dt| <= 5: the real-time
-    loop stops at the wall, the actuator never has to clip a command."""
-    lim = Limits(x_bounds=[[-1.0, 1.0], [-np.inf, np.inf]], u_bounds=[[-1.0, 1.0]],
-                 du_max=[5.0])
-    mpc = MPC(double_integrator(), dt=0.1, horizon=15, Q=[1.0, 0.1], R=0.01, limits=lim,
-              solver="rti")
-    ref_x, ref_u = np.tile([2.0, 0.0], (16, 1)), np.zeros((15, 1))
-    last = {}
-
-    def law(k, x):
-        last["sol"] = mpc.solve(x, ref_x, ref_u, u_prev=last.get("u"), warm=last.get("sol"))
-        last["u"] = last["sol"].u[0]
-        return last["u"]
-
-    run = closed_loop(double_integrator(), law, [0.0, 0.0], dt=0.1, steps=60, limits=lim,
-                      samples=10)
-    assert lim.check(run)["respected"]
-    np.testing.assert_allclose(run.u, run.u_commanded, atol=1e-9)
-    assert run.final[0] == pytest.approx(1.0, abs=0.01)
-
-
-def test_real_time_swing_up_of_a_pendulum_on_a_cart_with_noise():
-    system = PendulumOnCart()
-    lim = Limits.named(system.state_names, system.input_names, states={"s": 0.25},
-                       inputs={"u": 15}, rates={"u": 500})
-    x0, dt = np.array([np.pi, 0, 0, 0]), 0.02
-    plan = plan_trajectory(system.equations(), x0=x0, xf=np.zeros(4), T=1.5, n_intervals=75,
-                           Q=(10, 20, 1, 0.1), limits=lim, verbose=False)
-    tight = Limits.named(system.state_names, system.input_names, states={"s": 0.24},
-                         inputs={"u": 15}, rates={"u": 500})
-    mpc = MPC(system.equations(), dt=dt, horizon=20, Q=(10, 20, 1, 0.1), limits=tight,
-              substeps=1, solver="rti")
-    law = mpc.follow(plan)
-    run = closed_loop(system.rhs, law, x0, dt=dt, steps=125, limits=lim, samples=4,
-                      noise_std=[1e-3, 5e-4, 2e-2, 5e-3], seed=0)
-    assert lim.check(run)["respected"]
-    assert swing_up_errors(run.final, angles=(0,), rates=(2,))["success"]
-    assert all(law.converged) and set(law.iterations) == {1}
 
 
 def test_bad_solver_settings_are_named():

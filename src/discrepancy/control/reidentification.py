@@ -35,17 +35,15 @@ with :class:`~.learning.DiscrepancyUpdater`.
 from __future__ import annotations
 
 import copy
-import warnings
 
 import numpy as np
 
-from ..errors import ConvergenceWarning, ParameterError, ShapeError, describe
+from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import symbol
-from .codegen import ca
+from .one_step import OneStepFit
 
 #: process-noise intensities tried (units of the state per second per √second)
 PROCESS_NOISE_GRID = tuple(np.logspace(-3, 1, 9))
-FOLDS = 5
 
 
 class SmoothedLogUpdater:
@@ -118,7 +116,8 @@ class SmoothedLogUpdater:
             self.process_noise_passes_.append([q for _, q in smoothed])
             self._logs = [(x, log[2], log[1]) for (x, _), log in
                           zip(smoothed, self._raw, strict=True)]
-            fitted = self._fit(setup, chosen)
+            fitted, self.sweeps_ = self._one_step.fit(
+                self._logs, self.models_[-1].coefficients() if self.models_ else None, chosen)
             chosen = fitted if chosen is None else chosen
             settled = current is not None and hasattr(current, "coefficients") and \
                 np.allclose(fitted.coefficients(), current.coefficients(), rtol=1e-3,
@@ -168,7 +167,8 @@ class SmoothedLogUpdater:
             if unknown:
                 raise ParameterError(f"outputs and kinematics name unknown states {unknown}; "
                                      f"the states are {names}")
-            self._flow, self._theta = _flow_functions(self.setup_, self.substeps)
+            self._one_step = OneStepFit(self.setup_, self._template, self.substeps,
+                                        self.max_sweeps)
         return self.setup_
 
     def _equations(self, setup, current) -> list:
@@ -213,61 +213,6 @@ class SmoothedLogUpdater:
         ekf, result = filter_with(q)
         return ekf.smooth(result)[0], q
 
-    # -------------------------------------------------------------------- fit
-    def _fit(self, setup, chosen=None):
-        """Fixed-point iteration of the one-step regression (module docstring): terms
-        chosen by the optimizer, or, given the model ``chosen`` of an earlier pass, its
-        terms refitted by least squares."""
-        from ..optimizers import GramStatistics
-
-        n, p = setup.n_states, setup.n_features
-        coef = np.zeros((n, p)) if not self.models_ else self.models_[-1].coefficients()
-        rows = sum(len(x) - 1 for x, _, _ in self._logs)
-        fitted, self.sweeps_ = None, 0
-        for _ in range(self.max_sweeps):
-            self.sweeps_ += 1
-            stats = GramStatistics(p, n, FOLDS, max(4, rows // (2 * FOLDS)))
-            first = 0
-            for x, u, dt in self._logs:
-                theta, target, signal = self._rows(x, u, dt, coef)
-                stats.add(theta, target, signal, first_row=first)
-                first += len(theta)
-            if chosen is None:
-                fitted = copy.deepcopy(self._template).fit_statistics(stats, setup)
-            else:
-                fitted = chosen.with_coefficients(_refit(stats, chosen.coefficients() != 0))
-            new = fitted.coefficients()
-            change = np.max(np.abs(new - coef)) / max(np.max(np.abs(new)), 1e-12)
-            coef = new
-            if change < 1e-9:
-                break
-        else:
-            warnings.warn(f"the one-step fit did not reach a fixed point in {self.max_sweeps} "
-                          f"iterations (last relative change {change:.2g})", ConvergenceWarning,
-                          stacklevel=3)
-        return fitted
-
-    def _rows(self, x, u, dt, coef):
-        """``θ̄ (m-1, p)``, targets and ``(x̂_{k+1} - x̂_k) / dt`` of one log."""
-        m = len(x)
-        xi = np.tile(coef.T.reshape(-1, 1), (1, m - 1))
-        stepped = self._flow.map(m - 1)(x[:-1].T, u[:-1].T, xi, np.full((1, m - 1), dt))
-        theta_map = self._theta.map(m - 1)
-        theta = 0.5 * (theta_map(x[:-1].T, u[:-1].T) + theta_map(x[1:].T, u[:-1].T)).full().T
-        stepped = stepped.full().T
-        target = (x[1:] - stepped) / dt + theta @ coef.T
-        return theta, target, (x[1:] - x[:-1]) / dt
-
-
-def _refit(stats, support) -> np.ndarray:
-    """Least-squares coefficients ``(n, p)`` of each state's terms in ``support``."""
-    coef = np.zeros(support.shape)
-    for i, terms in enumerate(support):
-        if terms.any():
-            coef[i, terms] = np.linalg.lstsq(stats.gram[np.ix_(terms, terms)],
-                                             stats.rhs[terms, i], rcond=None)[0]
-    return coef
-
 
 def _check_settings(updater) -> None:
     """The constructor's arguments, checked when first needed (the estimator contract)."""
@@ -292,24 +237,3 @@ def _log_likelihood(filter_with, q) -> float:
         return float(filter_with(q)[1].log_likelihood)
     except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # a diverging filter
         return -np.inf
-
-
-def _flow_functions(setup, substeps: int):
-    """CasADi ``flow(x, u, vec(Ξ), dt)`` (the hybrid model's held-input RK4 step with
-    coefficients ``Ξ``) and ``theta(x, u)`` (the library's columns), for one sample each."""
-    from ..models.casadi_form import library_columns, prior_expression
-
-    n, r, p = setup.n_states, setup.n_inputs, setup.n_features
-    x, u = ca.SX.sym("x", n), ca.SX.sym("u", r)
-    xi, dt = ca.SX.sym("xi", n * p), ca.SX.sym("dt")
-    theta = library_columns(setup.library.feature_expressions_, setup.variable_names, x, u)
-    rhs = prior_expression(setup.prior, x, u) + ca.mtimes(ca.reshape(xi, n, p), theta)
-    f = ca.Function("f", [x, u, xi], [rhs])
-    h, z = dt / substeps, x
-    for _ in range(substeps):
-        k1 = f(z, u, xi)
-        k2 = f(z + h / 2 * k1, u, xi)
-        k3 = f(z + h / 2 * k2, u, xi)
-        k4 = f(z + h * k3, u, xi)
-        z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("flow", [x, u, xi, dt], [z]), ca.Function("theta", [x, u], [theta])

@@ -1,13 +1,11 @@
 """Report, figures and results of ``cart-mpc`` (numbers come from the runs)."""
 from __future__ import annotations
 
-import os
-import platform
-
 import numpy as np
 
 from .campaign import CONTROLLERS, OUTPUT_FEEDBACK, REFERENCE, ROUTES
 from .cart_mpc import DU_MAX, EXACT_TERMS, MAX_ATTEMPTS, NOISE, RAIL, U_MAX, identification
+from .report import machine
 
 #: what each controller's CPU time per sample measures, by the study's controller name
 SOLVER_LABELS = {"hybrid + MPC": "real-time iteration (one SQP step, DAQP), state feedback",
@@ -21,18 +19,6 @@ def _times(seconds) -> dict:
     return {"median_ms": float(np.median(ms)), "p99_ms": float(np.percentile(ms, 99)),
             "worst_ms": float(ms.max()), "samples": int(ms.size),
             "sustained_rate_hz_at_worst": float(1e3 / ms.max())}
-
-
-def machine() -> dict:
-    """The processor and its load when the timings were taken."""
-    cpu = platform.processor() or "unknown"
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(line.split(":", 1)[1].strip() for line in f if "model name" in line)
-    except (OSError, StopIteration):
-        pass
-    return {"processor": cpu, "logical_cpus": os.cpu_count(),
-            "load_average_1_5_15_min": [round(v, 2) for v in os.getloadavg()]}
 
 
 def on_grid(run, t) -> np.ndarray:
