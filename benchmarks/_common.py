@@ -62,12 +62,9 @@ def machine() -> str:
     import pysindy
     from threadpoolctl import threadpool_info
 
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(line.split(":", 1)[1].strip() for line in f if "model name" in line)
-    except (OSError, StopIteration):
-        pass
+    from discrepancy_paper.experiments.report import machine as processor
+
+    cpu = processor()["processor"]
     try:
         mem = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
     except (ValueError, OSError):

@@ -1,4 +1,4 @@
-"""The adversarial suite tries 688 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 772 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -19,12 +19,13 @@
 | dask | 11 |
 | cli | 45 |
 | energy | 44 |
-| control | 25 |
+| control | 61 |
 | isolated | 48 |
-| total | 688 |
+| estimation | 48 |
+| total | 772 |
 
-574 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 114 must give the right answer, checked against an
+650 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 122 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 48 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
@@ -39,6 +40,7 @@ from pathlib import Path
 import test_adversarial_cli
 import test_adversarial_components
 import test_adversarial_energy_control
+import test_adversarial_estimation
 import test_adversarial_files
 import test_adversarial_fit
 import test_adversarial_isolated
@@ -46,7 +48,7 @@ import test_adversarial_models
 
 TABLES = [test_adversarial_fit, test_adversarial_components, test_adversarial_models,
           test_adversarial_files, test_adversarial_cli, test_adversarial_energy_control,
-          test_adversarial_isolated]
+          test_adversarial_isolated, test_adversarial_estimation]
 
 
 def test_the_docstring_gives_the_number_of_distinct_rows_per_entry_point():

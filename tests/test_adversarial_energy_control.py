@@ -8,7 +8,19 @@ from scipy.integrate import solve_ivp
 
 import discrepancy as dc
 from adversarial import Case, check, params, raises, returns
-from discrepancy.control import as_casadi, plan_trajectory, replay, rk4_step, swing_up_errors, tvlqr
+from discrepancy.control import (
+    MPC,
+    OutputFeedback,
+    SmoothedLogUpdater,
+    as_casadi,
+    closed_loop,
+    plan_trajectory,
+    replay,
+    rk4_step,
+    swing_up_errors,
+    tvlqr,
+)
+from discrepancy.control.codegen import compiled
 from discrepancy.errors import (
     DataError,
     InfeasibleError,
@@ -128,7 +140,107 @@ CASES = [
     Case("control", "replay of a feedback law raising", lambda: replay(DECAY, [1.0], [0, 1, 2], lambda k, x: 1 / 0), raises(ParameterError, r"law raised ZeroDivisionError")),
     Case("control", "replay of x' = -x is exact", lambda: replay(DECAY, [1.0], [0, 1, 2], np.zeros((2, 1))).x[:, 0], returns(lambda x: np.allclose(x, np.exp(-np.arange(3.0)), rtol=1e-9))),
     Case("control", "swing-up errors of a missing index", lambda: swing_up_errors([0.0, 0.0], angles=[5], rates=[1]), raises(ShapeError, r"angles")),
+    # --- control: real-time MPC, output feedback, re-identification from control logs
+    Case("control", "MPC solver unknown", lambda: MPC(DOUBLE, dt=0.1, solver="acados"), raises(ParameterError, r"solver must be one of \['ipopt', 'rti'\]; got 'acados'")),
+    Case("control", "MPC qp_solver unknown", lambda: MPC(DOUBLE, dt=0.1, solver="rti", qp_solver="gurobi2"), raises(ParameterError, r"qp_solver must be a CasADi QP solver available here .* got 'gurobi2'")),
+    Case("control", "MPC max_iter 0", lambda: MPC(DOUBLE, dt=0.1, solver="rti", max_iter=0), raises(ParameterError, r"max_iter must be a positive integer; got 0")),
+    Case("control", "MPC max_iter True", lambda: MPC(DOUBLE, dt=0.1, solver="rti", max_iter=True), raises(ParameterError, r"max_iter must be a positive integer; got True")),
+    Case("control", "MPC compile a word", lambda: MPC(DOUBLE, dt=0.1, solver="rti", compile="yes"), raises(ParameterError, r"compile must be True or False; got 'yes'")),
+    Case("control", "MPC soft_penalty 0", lambda: MPC(DOUBLE, dt=0.1, solver="rti", soft_penalty=0.0), raises(ParameterError, r"soft_penalty must be a positive weight; got 0.0")),
+    Case("control", "MPC soft_penalty NaN", lambda: MPC(DOUBLE, dt=0.1, solver="rti", soft_penalty=np.nan), raises(ParameterError, r"soft_penalty must be a positive weight")),
+    Case("control", "RTI state of the wrong size", lambda: MPC(DOUBLE, dt=0.1, horizon=4, solver="rti").solve(np.zeros(3), np.zeros((5, 2)), np.zeros((4, 1))), raises(ShapeError, r"x must be the measured state \(2,\); got shape \(3,\)")),
+    Case("control", "RTI reference of the wrong shape", lambda: MPC(DOUBLE, dt=0.1, horizon=4, solver="rti").solve(np.zeros(2), np.zeros((4, 2)), np.zeros((4, 1))), raises(ShapeError, r"x_ref must be \(5, 2\) and u_ref \(4, 1\)")),
+    Case("control", "RTI one step on a linear system is exact", lambda: MPC(DOUBLE, dt=0.1, horizon=4, solver="rti").solve(np.array([1.0, 0.0]), np.zeros((5, 2)), np.zeros((4, 1))).x[1], returns(lambda x: np.allclose(x, [1.0, 0.0] + np.array([0.005, 0.1]) * RTI_U0, atol=1e-12))),
+    Case("control", "RTI with an input already past its bound and rate", lambda: MPC(DOUBLE, dt=0.1, horizon=4, solver="rti", limits=dc.control.Limits(u_bounds=[[-1, 1]], du_max=[1.0])).solve(np.zeros(2), np.zeros((5, 2)), np.zeros((4, 1)), u_prev=[5.0]).success, returns(lambda ok: ok is False)),
+    Case("control", "RTI warm start of NaN", lambda: MPC(DOUBLE, dt=0.1, horizon=4, solver="rti").solve(np.array([1.0, 0.0]), np.zeros((5, 2)), np.zeros((4, 1)), warm=NAN_WARM).u[0], returns(lambda u: np.allclose(u, RTI_U0, atol=1e-9))),
+    Case("control", "compiled with enabled a string", lambda: compiled(DOUBLE, enabled="no"), raises(ParameterError, r"compile must be True or False; got 'no'")),
+    Case("control", "closed loop outputs out of range", lambda: closed_loop(DOUBLE, lambda k, y: np.zeros(1), [0.0, 0.0], dt=0.1, steps=2, outputs=[2]), raises(ParameterError, r"outputs must be distinct indices of the 2 states")),
+    Case("control", "closed loop outputs repeated", lambda: closed_loop(DOUBLE, lambda k, y: np.zeros(1), [0.0, 0.0], dt=0.1, steps=2, outputs=[0, 0]), raises(ParameterError, r"outputs must be distinct indices")),
+    Case("control", "closed loop outputs by name", lambda: closed_loop(DOUBLE, lambda k, y: np.zeros(1), [0.0, 0.0], dt=0.1, steps=2, outputs=["p"]), raises(ParameterError, r"outputs must be distinct indices")),
+    Case("control", "closed loop outputs empty", lambda: closed_loop(DOUBLE, lambda k, y: np.zeros(1), [0.0, 0.0], dt=0.1, steps=2, outputs=[]), raises(ParameterError, r"outputs must be distinct indices of the 2 states \(at least one\)")),
+    Case("control", "closed loop gives the law only the outputs", lambda: closed_loop(DOUBLE, SEEN.append_zero, [3.0, 4.0], dt=0.1, steps=1, outputs=[1]) and SEEN.last, returns(lambda y: np.array_equal(y, [4.0]))),
+    Case("control", "output feedback without a filter", lambda: OutputFeedback(lambda k, x: np.zeros(1), object(), x0=[0, 0], P0=1.0, dt=0.1), raises(ParameterError, r"estimator must have start, update and predict")),
+    Case("control", "output feedback dt 0", lambda: OutputFeedback(lambda k, x: np.zeros(1), EKF, x0=[0, 0], P0=1.0, dt=0), raises(ParameterError, r"dt must be a positive control period")),
+    Case("control", "output feedback law a number", lambda: OutputFeedback(3, EKF, x0=[0, 0], P0=1.0, dt=0.1), raises(ParameterError, r"law must be callable")),
+    Case("control", "output feedback called twice", lambda: _twice(), raises(ShapeError, r"called twice without notify_applied")),
+    Case("control", "output feedback errors of another run", lambda: OutputFeedback(lambda k, x: np.zeros(1), EKF, x0=[0, 0], P0=1.0, dt=0.1).estimation_errors(closed_loop(DOUBLE, lambda k, y: np.zeros(1), [0.0, 0.0], dt=0.1, steps=3)), raises(ShapeError, r"the run has states \(0, 2\)|the run has states")),
+    Case("control", "log updater outputs a string", lambda: updater(outputs="p").update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"outputs must be a list of distinct state names; got 'p'")),
+    Case("control", "log updater outputs repeated", lambda: updater(outputs=["p", "p"]).update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"outputs must be a list of distinct state names")),
+    Case("control", "log updater unknown output", lambda: updater(outputs=["angle"]).update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"outputs and kinematics name unknown states \['angle'\]")),
+    Case("control", "log updater kinematics a list", lambda: updater(kinematics=["p", "v"]).update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"kinematics must be a dict")),
+    Case("control", "log updater kinematics unknown rate", lambda: updater(kinematics={"p": "speed"}).update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"unknown states \['speed'\]")),
+    Case("control", "log updater substeps 0", lambda: updater(substeps=0).update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"substeps must be a positive integer; got 0")),
+    Case("control", "log updater passes 0", lambda: updater(passes=0).update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"passes must be a positive integer; got 0")),
+    Case("control", "log updater process noise a word", lambda: updater(process_noise="high").update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"process_noise must be 'auto' or a std per state; got 'high'")),
+    Case("control", "log updater callable prior", lambda: SmoothedLogUpdater(dc.DiscrepancyModel(prior=lambda x, u: x), outputs=["x1"], measurement_noise=[0.1]).update(LOG_Y, 0.1, u=LOG_U), raises(ParameterError, r"model must be an unfitted DiscrepancyModel with a sympy prior")),
+    Case("control", "log updater period negative", lambda: updater().update(LOG_Y, -0.1, u=LOG_U), raises(ParameterError, r"t must be the control period \(s\) of the log; got -0.1")),
+    Case("control", "log updater inputs of the wrong length", lambda: updater().update(LOG_Y, 0.1, u=LOG_U[:-1]), raises(ShapeError, r"y must be \(m, 1\) and u \(m, 1\)")),
+    Case("control", "log updater of two samples", lambda: updater().update(LOG_Y[:2], 0.1, u=LOG_U[:2]), raises(ShapeError, r"a log needs at least 3 samples; got 2")),
+    Case("control", "log updater finds a missing force", lambda: updater().update(LOG_Y, 0.1, u=LOG_U).coefficients(), returns(lambda c: np.count_nonzero(c) == 1 and abs(c[1, 2] + 0.5) < 0.01)),
 ]
+
+
+def _rti_u0():
+    """The first input of the double integrator's unconstrained MPC from (1, 0), horizon 4,
+    Q = I, R = 1, terminal weight Q: the exact QP solved by numpy."""
+    A, B = np.array([[1, 0.1], [0, 1]]), np.array([[0.005], [0.1]])
+    G = np.zeros((8, 4))
+    for k in range(4):
+        for j in range(k + 1):
+            G[2 * k:2 * k + 2, j] = (np.linalg.matrix_power(A, k - j) @ B).ravel()
+    free = np.concatenate([np.linalg.matrix_power(A, k + 1) @ [1.0, 0.0] for k in range(4)])
+    return np.linalg.solve(G.T @ G + np.eye(4), -G.T @ free)[0]
+
+
+class _Seen(list):
+    last = None
+
+    def append_zero(self, k, y):
+        _Seen.last = np.asarray(y)
+        return np.zeros(1)
+
+
+def _twice():
+    law = OutputFeedback(lambda k, x: np.zeros(1), EKF, x0=[0, 0], P0=1.0, dt=0.1)
+    law(0, [0.0])
+    law(1, [0.0])
+
+
+def updater(**kw):
+    """Re-identification of x'' = u - 0.5 x' whose prior misses the friction, position measured."""
+    p, v, u = (dc.symbolic.symbol(n) for n in ("p", "v", "u"))
+    model = dc.DiscrepancyModel(prior=[v, u], feature_library=dc.PolynomialLibrary(1),
+                                state_names=["p", "v"], input_names=["u"])
+    options = {"outputs": ["p"], "measurement_noise": [1e-4], "kinematics": {"p": "v"},
+               "optimizer": dc.STLSQ(threshold="auto", normalize_columns=True), **kw}
+    return SmoothedLogUpdater(model, **options)
+
+
+def _log():
+    """Position of x'' = u - 0.5 x' sampled every 0.1 s with u held, noise 1e-4 (seed 0)."""
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1, 1, 20), 5)[:, None]
+    A = np.array([[0.0, 1.0], [0.0, -0.5]])
+    from scipy.linalg import expm
+    M = np.zeros((3, 3))
+    M[:2, :2], M[1, 2] = A, 1.0
+    M = expm(M * 0.1)
+    x, ys = np.zeros(2), []
+    for k in range(100):
+        ys.append(x[0] + 1e-4 * rng.standard_normal())
+        x = M[:2, :2] @ x + M[:2, 2] * u[k, 0]
+    return np.array(ys)[:, None], u
+
+
+RTI_U0 = _rti_u0()
+NAN_WARM = MPC(DOUBLE, dt=0.1, horizon=4, solver="rti").solve(
+    np.array([1.0, 0.0]), np.zeros((5, 2)), np.zeros((4, 1)))
+NAN_WARM = type(NAN_WARM)(**{**NAN_WARM.__dict__, "x": NAN_WARM.x * np.nan})
+SEEN = _Seen()
+EKF = __import__("discrepancy.estimation", fromlist=["x"]).ExtendedKalmanFilter(
+    [dc.symbolic.symbol("v"), dc.symbolic.symbol("u")], outputs=["p"], process_noise=[0.0, 0.0],
+    measurement_noise=[0.01], state_names=["p", "v"], input_names=["u"])
+LOG_Y, LOG_U = _log()
 
 
 @params(CASES)

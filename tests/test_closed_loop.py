@@ -59,3 +59,25 @@ def test_bad_arguments_are_named():
     with pytest.raises(ShapeError, match="noise_std"):
         closed_loop(integrator(), lambda k, x: np.zeros(1), [0.0], dt=0.1, steps=2,
                     noise_std=[-1.0])
+
+
+def test_output_feedback_sees_only_the_measured_states_in_the_given_order():
+    """With outputs=[1, 0] the law gets (x2 + noise, x1 + noise); the log keeps those two
+    and NaN for the third state; the control log is what the law saw."""
+    x, u = ca.SX.sym("x", 3), ca.SX.sym("u", 1)
+    still = ca.Function("f", [x, u], [ca.vertcat(0 * u, 0 * u, 0 * u)])
+    seen = []
+    run = closed_loop(still, lambda k, y: seen.append(y) or np.zeros(1), [1.0, -2.0, 5.0],
+                      dt=0.01, steps=500, noise_std=[0.1, 0.001, 1.0], seed=3, samples=2,
+                      outputs=[1, 0])
+    seen = np.array(seen)
+    assert seen.shape == (500, 2)
+    np.testing.assert_allclose(seen.mean(axis=0), [-2.0, 1.0], atol=0.02)
+    np.testing.assert_allclose((seen - [-2.0, 1.0]).std(axis=0), [0.001, 0.1], rtol=0.1)
+    assert np.all(np.isnan(run.x_measured[:, 2])) and np.all(np.isnan(run.x_measured_dense[..., 2]))
+    y, dt, u_log = run.control_log()
+    np.testing.assert_array_equal(y[:-1], seen)
+    assert dt == pytest.approx(0.01) and u_log.shape == (501, 1)
+    with pytest.raises(ParameterError, match="outputs must be distinct indices"):
+        closed_loop(still, lambda k, y: np.zeros(1), [0.0, 0.0, 0.0], dt=0.1, steps=2,
+                    outputs=[0, 3])

@@ -80,3 +80,23 @@ except dc.errors.MissingDependencyError as e:
     print(e)
 """)
     assert "pip install 'discrepancy[scale]'" in out
+
+
+def test_filters_run_in_numpy_without_casadi():
+    out = run(BLOCK + """
+import numpy as np, sympy as sp, sys
+from discrepancy.estimation import ExtendedKalmanFilter
+x1, x2 = sp.symbols("x1 x2")
+kf = ExtendedKalmanFilter([x2, -x1], outputs=["x1"], state_names=["x1", "x2"],
+                          process_noise=[0, 0.01], measurement_noise=0.01)
+t = np.arange(200) * 0.05
+run = kf.filter(np.sin(t)[:, None], 0.05, x0=[0, 1], P0=[0.1, 0.1])
+assert abs(run.x[-1, 1] - np.cos(t[-1])) < 0.01, run.x[-1]
+try:
+    ExtendedKalmanFilter([x2, -x1], outputs=["x1"], state_names=["x1", "x2"],
+                         process_noise=[0, 0.01], measurement_noise=0.01, backend="casadi")
+except ImportError as e:
+    print("refused:", e)
+print(kf.backend, "casadi" in sys.modules)
+""")
+    assert "pip install 'discrepancy[control]'" in out and out.strip().endswith("numpy False")

@@ -9,7 +9,7 @@ Quick start::
                                 differentiation_method=dc.SavitzkyGolay(window_length=21))
     model.fit(x, t=0.01).print()
 """
-from . import errors, io, metrics, systems
+from . import errors, estimation, io, metrics, systems
 from ._version import __version__  # noqa: F401
 from .data.chunks import Chunk
 from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
@@ -36,5 +36,5 @@ __all__ = [
     "FourierLibrary", "GramStatistics", "HDF5Source", "Kalman", "Lasso", "NPZFiles",
     "PolynomialLibrary", "SR3", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline",
     "TrendFiltered",
-    "WeakForm", "ZarrSource", "errors", "io", "load_model", "metrics", "systems",
+    "WeakForm", "ZarrSource", "errors", "estimation", "io", "load_model", "metrics", "systems",
 ]

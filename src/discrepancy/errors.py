@@ -92,6 +92,10 @@ class CoarseSamplingWarning(UserWarning):
     """The data have too few samples per period for the chosen differentiation method."""
 
 
+class CompilationWarning(UserWarning):
+    """A function could not be compiled to C and runs in CasADi's virtual machine instead."""
+
+
 def describe(value) -> str:
     """Short description of a value for error messages: type and shape, never its content."""
     shape = getattr(value, "shape", None)

@@ -11,13 +11,16 @@ from .closed_loop import ClosedLoopRun, closed_loop
 from .learning import Attempt, DiscrepancyUpdater, learn_by_attempts
 from .limits import Limits
 from .mpc import MPC, MPCLaw, MPCSolution
+from .output_feedback import OutputFeedback
+from .reidentification import SmoothedLogUpdater
 from .replay import Run, interval_defects, replay, swing_up_errors
 from .sensitivity import parameter_sensitivity, state_transition
 from .tracking import Tracker, linearise, stationary_lqr, tvlqr
 from .trajectory import PAPER_Q, PAPER_R, Plan, plan_trajectory
 
 __all__ = ["MPC", "PAPER_Q", "PAPER_R", "Attempt", "ClosedLoopRun", "DiscrepancyUpdater",
-           "Limits", "MPCLaw", "MPCSolution", "Plan", "Run", "Tracker", "as_casadi",
+           "Limits", "MPCLaw", "MPCSolution", "OutputFeedback", "Plan", "Run",
+           "SmoothedLogUpdater", "Tracker", "as_casadi",
            "closed_loop", "from_equations", "interval_defects", "learn_by_attempts",
            "linearise", "parameter_sensitivity", "plan_trajectory", "replay", "rk4_step",
            "state_transition", "stationary_lqr", "swing_up_errors", "tvlqr"]

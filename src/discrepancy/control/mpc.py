@@ -11,10 +11,18 @@ intervals of ``dt`` (``substeps`` RK4 steps each, as the planner)::
          never makes the problem infeasible),
 
 with ``r``, ``v`` a window of the reference (a plan, then its final state held) and ``P``
-the tracking LQR's cost-to-go at the window's end. The problem is built once
-(:meth:`casadi.Opti.to_function`); each solve starts from the previous solution shifted
-by one sample. ``max_iter`` caps IPOPT's iterations: a small fixed number is a real-time
-mode whose cost per sample is bounded.
+the tracking LQR's cost-to-go at the window's end. Each solve starts from the previous
+solution shifted by one sample. Two solvers:
+
+* ``solver="rti"`` (real time): one Gauss-Newton SQP step per sample on the condensed QP
+  (:mod:`.rti`), solved by a dense QP solver (``qp_solver``, DAQP by default), optionally as
+  compiled C (``compile=True``). Its cost per sample is fixed and well under a millisecond
+  for a 6-state model over 20 intervals; the QP's solution is the step, so limits hold
+  exactly for the linearised prediction.
+* ``solver="ipopt"`` (the reference): the NLP built once with
+  :meth:`casadi.Opti.to_function`, IPOPT warm-started; ``max_iter`` caps its iterations
+  (a small fixed number is a real-time mode, though IPOPT's cost per iteration is several
+  times the whole real-time iteration).
 """
 from __future__ import annotations
 
@@ -27,8 +35,12 @@ import numpy as np
 from ..errors import ParameterError, ShapeError
 from .dynamics import as_casadi, rk4_step
 from .limits import Limits
+from .rti import RealTimeIteration
 from .tracking import _diag, tvlqr
 from .trajectory import Plan
+
+#: solvers and their default iterations per sample
+SOLVERS = {"ipopt": 100, "rti": 1}
 
 
 class MPC:
@@ -42,26 +54,46 @@ class MPC:
         limits: a :class:`~.limits.Limits`: input bounds and rates hard, state bounds soft.
         substeps: RK4 steps per interval in the prediction.
         soft_penalty: ``ρ``, weight of the state-bound slacks (per unit of excess).
-        max_iter, tol: IPOPT's iteration cap and tolerance per sample.
+        solver: ``"ipopt"`` (reference NLP solver) or ``"rti"`` (real-time iteration).
+        max_iter: iterations per sample: IPOPT's cap (default 100) or the number of SQP
+            steps of the real-time iteration (default 1).
+        tol: IPOPT's tolerance per sample.
+        qp_solver: the real-time iteration's QP solver (a CasADi conic: ``"daqp"``,
+            ``"qpoases"``, ``"osqp"``, ``"qrqp"``, ...).
+        compile: the real-time iteration's functions as compiled C, cached on disk
+            (:func:`~.codegen.compiled`; needs a C compiler, else warns and runs uncompiled).
     """
 
     def __init__(self, model, *, dt: float, horizon: int = 25, Q=None, R=1.0,
                  limits: Limits | None = None, substeps: int = 2, soft_penalty: float = 1e4,
-                 max_iter: int = 100, tol: float = 1e-6):
+                 solver: str = "ipopt", max_iter: int | None = None, tol: float = 1e-6,
+                 qp_solver: str = "daqp", compile: bool = False):
         f = as_casadi(model)
         n, r = f.size1_in(0), f.size1_in(1)
         if not (isinstance(horizon, int) and horizon >= 2):
             raise ParameterError(f"horizon must be an integer >= 2 intervals; got {horizon!r}")
         if not (np.isfinite(dt) and dt > 0):
             raise ParameterError(f"dt must be a positive time step (s); got {dt!r}")
-        if not (isinstance(max_iter, int) and max_iter >= 1):
+        if solver not in SOLVERS:
+            raise ParameterError(f"solver must be one of {list(SOLVERS)}; got {solver!r}")
+        max_iter = SOLVERS[solver] if max_iter is None else max_iter
+        if not (isinstance(max_iter, int) and not isinstance(max_iter, bool) and max_iter >= 1):
             raise ParameterError(f"max_iter must be a positive integer; got {max_iter!r}")
+        if not (np.isfinite(soft_penalty) and soft_penalty > 0):
+            raise ParameterError(f"soft_penalty must be a positive weight; got {soft_penalty!r}")
         self.n, self.r, self.dt, self.horizon = n, r, float(dt), horizon
         self.Q, self.R = _diag("Q", np.ones(n) if Q is None else Q, n), _diag("R", R, r)
         self.limits = Limits() if limits is None else limits
-        self.substeps, self.max_iter = substeps, max_iter
+        self.substeps, self.max_iter, self.solver = substeps, max_iter, solver
+        self.soft_penalty = float(soft_penalty)
         self._model = model
-        self._function = self._build(f, soft_penalty, tol)
+        if solver == "rti":
+            self._rti = RealTimeIteration(
+                f, dt=self.dt, substeps=substeps, horizon=horizon, Q=self.Q, R=self.R,
+                bounds=self.limits.sized(n, r), soft_penalty=soft_penalty,
+                qp_solver=qp_solver, compile=compile)
+        else:
+            self._function = self._build(f, soft_penalty, tol)
 
     def _build(self, f, soft_penalty, tol):
         n, r, N = self.n, self.r, self.horizon
@@ -110,7 +142,7 @@ class MPC:
             u_prev: ``(r,)`` input applied during the last interval (rate limit; default 0).
             P: ``(n, n)`` terminal weight (default ``Q``).
             warm: the previous :class:`MPCSolution`, shifted by one sample as initial guess
-                (default: the reference).
+                (default, and after a failed real-time step: the reference).
         """
         N, n, r = self.horizon, self.n, self.r
         x_ref, u_ref = np.asarray(x_ref, dtype=float), np.asarray(u_ref, dtype=float)
@@ -119,14 +151,21 @@ class MPC:
                              f"{x_ref.shape} and {u_ref.shape}")
         u_prev = np.zeros(r) if u_prev is None else np.asarray(u_prev, dtype=float).ravel()
         P = self.Q if P is None else P
-        if warm is None:
-            xg, ug, sg, lg = x_ref.T, u_ref.T, np.zeros(self._slacks), 0.0
+        x = np.asarray(x, dtype=float).ravel()
+        if x.shape != (n,):
+            raise ShapeError(f"x must be the measured state ({n},); got shape {x.shape}")
+        if warm is None or not (np.all(np.isfinite(warm.x)) and np.all(np.isfinite(warm.u))) \
+                or (self.solver == "rti" and not warm.success):
+            xg, ug = x_ref.T, u_ref.T       # no warm start from a failed or diverged solve
         else:
             xg = np.hstack([warm.x[1:].T, warm.x[-1:].T])
             ug = np.hstack([warm.u[1:].T, warm.u[-1:].T])
-            sg, lg = np.zeros(self._slacks), warm.multipliers
         start, cpu = time.perf_counter(), time.process_time()
-        X, U, S, L, J = self._function(x, u_prev, x_ref.T, u_ref.T, P, xg, ug, sg, lg)
+        if self.solver == "rti":
+            return self._solve_rti(x, u_prev, x_ref, u_ref, P, xg, ug, start, cpu)
+        lg = 0.0 if warm is None or warm.multipliers.size == 0 else warm.multipliers
+        X, U, S, L, J = self._function(x, u_prev, x_ref.T, u_ref.T, P, xg, ug,
+                                       np.zeros(self._slacks), lg)
         elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
         stats = self._function.stats()
         return MPCSolution(x=np.array(X).T, u=np.array(U).reshape(r, N).T,
@@ -134,6 +173,23 @@ class MPC:
                            multipliers=np.array(L), solve_time=elapsed, cpu_time=cpu,
                            iterations=int(stats.get("iter_count", -1)),
                            success=bool(stats.get("success", False)))
+
+    def _solve_rti(self, x, u_prev, x_ref, u_ref, P, X, U, start, cpu) -> MPCSolution:
+        ok = True
+        for _ in range(self.max_iter):
+            X, U, S, converged = self._rti.step(x, u_prev, x_ref.T, u_ref.T, P, X, U)
+            if not converged:   # a warm start gone astray: one step from the reference
+                X, U, S, converged = self._rti.step(x, u_prev, x_ref.T, u_ref.T, P,
+                                                    x_ref.T, u_ref.T)
+            ok = ok and converged
+        elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
+        E, V = X.T - x_ref, U.T - u_ref
+        J = float(np.einsum("ki,ij,kj->", E[:-1], self.Q, E[:-1])
+                  + np.einsum("ki,ij,kj->", V, self.R, V) + E[-1] @ P @ E[-1]
+                  + self.soft_penalty * (np.sum(S) + np.sum(S ** 2)))
+        return MPCSolution(x=X.T, u=U.T, slack=float(np.max(S, initial=0.0)), objective=J,
+                           multipliers=np.zeros(0), solve_time=elapsed, cpu_time=cpu,
+                           iterations=self.max_iter, success=ok)
 
     def follow(self, plan: Plan, *, tracker=None, u_final=None) -> MPCLaw:
         """A law ``law(k, x) -> u`` for :func:`~.closed_loop.closed_loop`: track ``plan``
@@ -153,7 +209,8 @@ class MPC:
 class MPCSolution:
     """One MPC solve: predicted states ``x`` ``(N+1, n)`` and inputs ``u`` ``(N, r)`` (``u[0]``
     is applied), largest state-bound slack, objective, IPOPT multipliers (for the next warm
-    start), wall and CPU time (s), iterations and whether IPOPT converged."""
+    start; empty for the real-time iteration), wall and CPU time (s), iterations (IPOPT's, or
+    SQP steps) and whether the solver converged (IPOPT) or every QP was solved (RTI)."""
 
     x: np.ndarray
     u: np.ndarray

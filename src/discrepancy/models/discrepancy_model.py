@@ -18,6 +18,7 @@ from ..symbolic import compile_numpy, feature_name
 from .arguments import keywords_only
 from .checks import checked_discrepancy, pairs
 from .output_methods import OutputErrorMethods
+from .prediction_error_methods import PredictionErrorMethods
 from .setup import FitSetup, resolve_setup
 from .simulation import integrate
 from .term_constraints import Constraints
@@ -28,7 +29,7 @@ _NAMES = [None, InstanceOf(str, "a name"),
                     "a list of names")]
 
 
-class DiscrepancyModel(OutputErrorMethods, Estimator):
+class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
     """Hybrid model ``dx/dt = f_m(x, u) + g(x, u)`` with a sparse discrepancy ``g = Θ(x, u) Ξ``.
 
     Args:

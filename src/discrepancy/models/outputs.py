@@ -48,7 +48,7 @@ class OutputMap:
         self.k = len(self.expressions)
         self.selected = np.array(selected) if len(selected) == self.k else None
         self._values = [compile_numpy(e, names) for e in self.expressions]
-        self._jacobian = None if self.selected is not None else self._casadi_jacobian()
+        self._jacobian = None      # dh/dx by CasADi, built on first use (needs [control])
 
     def _casadi_jacobian(self):
         """``dh/dx`` by CasADi (exact through saturations such as ``Min``)."""
@@ -74,6 +74,8 @@ class OutputMap:
             out = np.zeros((m, self.k, self.n))
             out[:, np.arange(self.k), self.selected] = 1.0
             return out
+        if self._jacobian is None:
+            self._jacobian = self._casadi_jacobian()
         flat = np.asarray(self._jacobian.map(m)(states.T))    # (k, m n): sample j's block
         return flat.reshape(self.k, m, self.n).transpose(1, 0, 2)
 

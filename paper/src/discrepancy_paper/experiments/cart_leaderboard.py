@@ -39,9 +39,10 @@ def cell(task, f_true, nominal_plan, group: str, level: float, noise: float, *, 
     run = task.run(f_true, task.tracker(f_flawed, flawed_plan), X_HANG, seed=seed,
                    noise_scale=noise, samples=task.log_samples)
     out = {"flawed + TVLQR": task.judge(run)}
-    updater = DiscrepancyUpdater(task.template(prior))
     x, t, u = run.measured_trajectories()
-    hybrid = updater.update(x, t, u=u)
+    hybrid = DiscrepancyUpdater(task.template(prior)).update(x, t, u=u)
+    updater = task.smoothed_updater(prior, outputs=task.state_names, start=prior)
+    updater.update_from(run)     # re-identification adds to the flawed log
     f_hybrid = hybrid.to_casadi()
     plan = task.plan(f_hybrid, guess=flawed_plan)
     if plan is None:
@@ -51,7 +52,7 @@ def cell(task, f_true, nominal_plan, group: str, level: float, noise: float, *, 
     out["hybrid + TVLQR"] = task.judge(task.run(f_true, tracker, X_HANG, seed=seed + 1,
                                                 noise_scale=noise))
     attempt = task.mpc_attempt(f_true, X_HANG, seed=seed + 2, noise_scale=noise, guess=plan,
-                               first=(plan, tracker, None))
+                               first=(plan, tracker, None), log=updater.log_of)
     attempts = learn_by_attempts(attempt, updater, first=hybrid, max_attempts=MAX_ATTEMPTS)
     out["hybrid + MPC"] = attempts[0].result["verdict"]
     out["hybrid + MPC + re-identification"] = {**attempts[-1].result["verdict"],

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import platform
 import time
 from pathlib import Path
 
@@ -28,6 +30,18 @@ def _jsonable(value):
     if isinstance(value, (np.bool_,)):
         return bool(value)
     return value
+
+
+def machine() -> dict:
+    """The processor, its logical CPUs and the load average now (for timings)."""
+    cpu = platform.processor() or "unknown CPU"
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if "model name" in line)
+    except (OSError, StopIteration):
+        pass
+    return {"processor": cpu, "logical_cpus": os.cpu_count(),
+            "load_average_1_5_15_min": [round(v, 2) for v in os.getloadavg()]}
 
 
 class Report:

@@ -98,20 +98,47 @@ def learning_figure(learning: dict, terms: dict):
 
 
 def solve_time_figure(times: dict, *, period):
-    """Histogram of MPC solve times per sample (ms) ``{label: (cpu s, wall s)}``: CPU time
-    drawn, wall-clock figures in the legend; the control period dashed."""
-    fig, ax = plt.subplots(figsize=(7, 3.2))
-    for k, (label, (cpu, wall)) in enumerate(times.items()):
-        ms, wall = 1e3 * np.asarray(cpu), 1e3 * np.asarray(wall)
-        ax.hist(ms, bins=np.logspace(np.log10(max(ms.min(), 0.1)), np.log10(ms.max()) + 0.05,
-                                     40), alpha=0.6, color=f"C{k}",
-                label=f"{label}: CPU median {np.median(ms):.1f} ms, worst {ms.max():.1f} ms "
-                      f"(wall {np.median(wall):.1f} / {wall.max():.1f} ms)")
+    """Histogram of CPU time per sample (ms) of each controller ``{label: seconds}``; the
+    control period dashed."""
+    fig, ax = plt.subplots(figsize=(7.5, 3.4))
+    everything = 1e3 * np.concatenate([np.asarray(v, dtype=float) for v in times.values()])
+    bins = np.logspace(np.log10(max(everything.min(), 0.05)),
+                       np.log10(max(everything.max(), 1e3 * period)) + 0.05, 50)
+    for k, (label, seconds) in enumerate(times.items()):
+        ms = 1e3 * np.asarray(seconds, dtype=float)
+        ax.hist(ms, bins=bins, alpha=0.6, color=f"C{k}",
+                label=f"{label}: median {np.median(ms):.2f} ms, worst {ms.max():.1f} ms")
     ax.axvline(1e3 * period, color="tab:red", ls="--", label=f"control period {1e3 * period:g} ms")
     ax.set_xscale("log")
-    ax.set_xlabel("CPU time per MPC solve (ms)")
+    ax.set_xlabel("CPU time per sample (ms)")
     ax.set_ylabel("samples")
     ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def estimation_figure(run, estimates, stds, names, *, states):
+    """A filter's estimation error on ``states`` of a closed-loop run (at the control
+    samples) within its own ±2σ band, one panel per state, beside the true state (right
+    axis, grey) for scale; RMS error in each title."""
+    fig, axes = plt.subplots(len(states), 1, figsize=(9, 1.9 * len(states)), sharex=True,
+                             squeeze=False)
+    t = run.t[:len(estimates)]
+    for ax, i in zip(axes[:, 0], states, strict=True):
+        true = run.x[:len(estimates), i]
+        error, band = estimates[:, i] - true, 2 * stds[:, i]
+        ax.fill_between(t, -band, band, color="C1", alpha=0.25, lw=0, label="±2σ (the filter's)")
+        ax.plot(t, error, color="C1", lw=0.9, label="estimate − true")
+        twin = ax.twinx()
+        twin.plot(t, true, color="0.6", lw=0.8)
+        twin.set_ylabel(f"{names[i]} (true)", color="0.5", fontsize=8)
+        rms = float(np.sqrt(np.mean(error ** 2)))
+        ax.set_title(f"{names[i]}: RMS error {rms:.3g}, {np.mean(np.abs(error) <= band):.0%} "
+                     "of samples within ±2σ", fontsize=9)
+        ax.set_ylabel("error")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("t (s)")
     fig.tight_layout()
     return fig
 

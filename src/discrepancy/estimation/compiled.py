@@ -1,0 +1,140 @@
+"""The filters' steps as CasADi Functions, built once per filter from
+:mod:`~discrepancy.estimation.kalman_math` on CasADi symbols.
+
+Every Function takes and returns one flat column, so a call from Python converts one
+array each way (the overhead of a call is then a few tens of microseconds, which is most
+of an online step). Layouts (``vec`` is column-major):
+
+* predict: ``[x; vec P; U; h] -> [x⁺; vec P⁺; vec C]`` (``U``: the input at the
+  ``2S + 1`` stage times of the interval, input by input; ``C = Cov(x, x⁺)``);
+* update: ``[x; vec P; y; w] -> [x; vec P; e; vec S; nll]`` (``w``: 1 where ``y`` is
+  measured);
+* step (update then predict, for whole records): carry ``[x; vec P]`` of the prediction,
+  data ``[y; w; U; h]``, output ``[x; vec P; e; vec S; nll; vec C]`` of the update and the
+  carry of the next prediction; ``mapaccum`` runs ``BLOCK`` of them per call.
+
+The noise covariances and model parameters are inputs of :func:`step_expressions`, so a
+prediction-error fit builds the same step with them as symbols.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import kalman_math as km
+from .backends import CasadiOps
+
+#: samples per compiled call of a whole-record filter
+BLOCK = 128
+
+
+def layout(n: int, k: int, r: int, substeps: int) -> dict:
+    """Sizes of the flat columns."""
+    width = r * (2 * substeps + 1)
+    return {"carry": n + n * n, "data": 2 * k + width + 1, "stages": width,
+            "out": n + n * n + k + k * k + 1 + n * n}
+
+
+def step_expressions(ca, kind: str, ops: CasadiOps, n: int, k: int, *, Q, R, substeps: int,
+                     discrete: bool, weights=None):
+    """Symbols and expressions of one update and one prediction: a dict with ``carry``,
+    ``data`` (symbols), ``update`` (``x, P, e, S, nll``), ``predict`` (``x, P, C``) from
+    the updated state, and the separate symbols ``x, P, U, h, y, w``."""
+    sizes = layout(n, k, ops.r, substeps)
+    carry, data = ca.SX.sym("carry", sizes["carry"]), ca.SX.sym("data", sizes["data"])
+    x, P = carry[:n], ca.reshape(carry[n:], n, n)
+    y, w = data[:k], data[k:2 * k]
+    U, h = data[2 * k:2 * k + sizes["stages"]], data[-1]
+    if kind == "ekf":
+        update = km.ekf_update(ops, x, P, y, w, R)
+        predict = km.ekf_predict(ops, update[0], update[1], U, h, Q, substeps, discrete)
+    else:
+        update = km.ukf_update(ops, x, P, y, w, R, weights)
+        predict = km.ukf_predict(ops, update[0], update[1], U, h, Q, substeps, discrete,
+                                 weights)
+    return {"carry": carry, "data": data, "x": x, "P": P, "U": U, "h": h, "y": y, "w": w,
+            "update": update, "predict": predict}
+
+
+def flat_update(ca, update):
+    x, P, e, S, nll = update
+    return ca.vertcat(x, ca.vec(P), e, ca.vec(S), nll)
+
+
+class CompiledSteps:
+    """The predict, update and block Functions of one filter (constants baked in)."""
+
+    def __init__(self, kind, dynamics, measurement, Q, R, substeps, weights):
+        import casadi as ca
+
+        n, k, r = dynamics.n, measurement.k, dynamics.r
+        self.n, self.k, self.r, self.substeps = n, k, r, substeps
+        ops = CasadiOps(ca, dynamics.casadi, ca.DM(dynamics.parameters), measurement.casadi,
+                        n, r, substeps)
+        sym = step_expressions(ca, kind, ops, n, k, Q=ca.DM(Q), R=ca.DM(R),
+                               substeps=substeps, discrete=dynamics.discrete_time,
+                               weights=weights)
+        x, P, U, h = sym["x"], sym["P"], sym["U"], sym["h"]
+        if kind == "ekf":
+            alone = km.ekf_predict(ops, x, P, U, h, ca.DM(Q), substeps, dynamics.discrete_time)
+            update = km.ekf_update(ops, x, P, sym["y"], sym["w"], ca.DM(R))
+        else:
+            alone = km.ukf_predict(ops, x, P, U, h, ca.DM(Q), substeps,
+                                   dynamics.discrete_time, weights)
+            update = km.ukf_update(ops, x, P, sym["y"], sym["w"], ca.DM(R), weights)
+        self.predict = fast_call(ca, ca.Function(
+            "predict", [ca.vertcat(x, ca.vec(P), U, h)],
+            [ca.densify(ca.vertcat(alone[0], ca.vec(alone[1]), ca.vec(alone[2])))]))
+        self.update = fast_call(ca, ca.Function(
+            "update", [ca.vertcat(x, ca.vec(P), sym["y"], sym["w"])],
+            [ca.densify(flat_update(ca, update))]))
+        xp, Pp, C = sym["predict"]
+        step = ca.Function("step", [sym["carry"], sym["data"]],
+                           [ca.vertcat(xp, ca.vec(Pp)),
+                            ca.vertcat(flat_update(ca, sym["update"]), ca.vec(C))])
+        self.block = step.mapaccum("filter", BLOCK)
+
+    def run(self, x0, P0, data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """See :func:`run_blocks`."""
+        return run_blocks(self.block, x0, P0, data,
+                          layout(self.n, self.k, self.r, self.substeps)["out"])
+
+
+def fast_call(ca, function):
+    """``call(flat (in,)) -> (out,)`` through CasADi's buffer interface: the arrays are
+    bound once, so a call costs about a microsecond of overhead instead of the tens of a
+    ``Function.__call__`` (which converts its arguments each time). Not thread-safe: one
+    filter object per thread."""
+    buffer, evaluate = function.buffer()
+    arg, res = np.zeros(function.nnz_in(0)), np.zeros(function.nnz_out(0))
+    buffer.set_arg(0, memoryview(arg))
+    buffer.set_res(0, memoryview(res))
+
+    def call(values):
+        arg[:] = values
+        evaluate()
+        return res.copy()
+
+    call.keep = (function, buffer, evaluate, arg, res)   # the buffer must outlive its calls
+    return call
+
+
+def run_blocks(block, x0, P0, data: np.ndarray, width: int, extra=()):
+    """Outputs ``(m, width)`` of every step of ``block`` (a ``mapaccum`` of ``BLOCK`` steps,
+    called with the carry, the data columns and ``extra``) over ``data`` ``(m, data)``, and
+    the carry after each ``(m, n + n²)``; padding steps (``h = 0``, nothing measured)
+    change nothing. Stops at a carry that is not finite (the rest stays NaN)."""
+    m = len(data)
+    padded = -(-m // BLOCK) * BLOCK
+    columns = np.zeros((data.shape[1], padded))
+    columns[:, :m] = data.T
+    carry = np.concatenate([x0, P0.ravel(order="F")])
+    out = np.full((padded, width), np.nan)
+    carries = np.full((padded, len(carry)), np.nan)
+    for i in range(0, padded, BLOCK):
+        after, outputs = block(carry, columns[:, i:i + BLOCK], *extra)
+        out[i:i + BLOCK] = np.asarray(outputs).T
+        carries[i:i + BLOCK] = np.asarray(after).T
+        carry = carries[i + BLOCK - 1]
+        if not np.all(np.isfinite(carry)):
+            break
+    return out[:m], carries[:m]

@@ -1,0 +1,118 @@
+"""The innovations' negative log-likelihood of a hybrid model whose coefficients and noise
+levels are free, with its exact gradient (CasADi reverse mode through the whole filter).
+
+The model is ``x' = f_m(x, u) + Ξ θ(x, u)`` with the coefficients of one support as symbols
+(the terms off the support are not in the expressions, so sparse supports step faster),
+augmented by the disturbance states of
+:mod:`~discrepancy.estimation.disturbances`; process noise ``Q = diag(q²)`` per second and
+measurement noise ``R = diag(r²)``. One step of the extended Kalman filter
+(:mod:`~discrepancy.estimation.kalman_math`) is written once in CasADi symbols with
+``(Ξ, q, r)`` as inputs and ``mapaccum`` runs ``BLOCK`` samples per call; a record's
+objective is an MX graph of its blocks with the data as constants, so its gradient costs
+about three evaluations of the filter whatever the number of parameters. The EKF's
+covariance depends on the model's Jacobian, so the gradient needs second derivatives of
+``f``: CasADi takes them from the same expressions.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..models.casadi_form import _casadi, library_columns, prior_expression
+from .backends import CasadiOps
+from .compiled import BLOCK, flat_update, layout, run_blocks, step_expressions
+from .disturbances import augment_casadi
+from .dynamics import check_points
+
+
+@dataclass
+class LikelihoodRecord:
+    """One record's filter data ``(m, data)`` (see :mod:`~discrepancy.estimation.compiled`),
+    its prior belief and the samples whose innovations count."""
+
+    data: np.ndarray
+    x0: np.ndarray
+    P0: np.ndarray
+    weights: np.ndarray
+
+
+class InnovationLikelihood:
+    """The filter of a set-up's hybrid model with free ``(Ξ, q, r)``.
+
+    Args:
+        setup: the model's :class:`~discrepancy.models.FitSetup`.
+        measurement: a :class:`~discrepancy.estimation.measurement.Measurement`.
+        equations: indices of the equations with a disturbance state.
+        substeps: RK4 steps per sample interval.
+        support: ``(n, p)`` bool, the free coefficients (row-major order in ``Ξ``'s input).
+    """
+
+    def __init__(self, setup, measurement, equations, substeps: int, support: np.ndarray):
+        ca = _casadi()
+        n, r = setup.n_states, setup.n_inputs
+        self.n, self.k, self.support = n, measurement.k, support
+        self.N = n + len(equations)
+        self.substeps = substeps
+        rows, cols = np.nonzero(support)
+        x, u, xi = ca.SX.sym("x", n), ca.SX.sym("u", r), ca.SX.sym("xi", len(rows))
+        used = sorted(set(cols.tolist()))
+        theta = library_columns([setup.library.feature_expressions_[j] for j in used],
+                                setup.variable_names, x, u) if used else ca.SX(0, 1)
+        rhs = prior_expression(setup.prior, x, u, check_points=check_points(n, r))
+        for i, (row, col) in enumerate(zip(rows, cols, strict=True)):
+            rhs[int(row)] += xi[i] * theta[used.index(int(col))]
+        f = augment_casadi(ca.Function("f", [x, u, xi], [rhs]), n, equations) \
+            if equations else ca.Function("f", [x, u, xi], [rhs])
+        self.f, self.r = f, r
+        q, r_std = ca.SX.sym("q", self.N), ca.SX.sym("r", self.k)
+        ops = CasadiOps(ca, f, xi, measurement.casadi, self.N, r, substeps)
+        sym = step_expressions(ca, "ekf", ops, self.N, self.k, Q=ca.diag(q ** 2),
+                               R=ca.diag(r_std ** 2), substeps=substeps, discrete=False)
+        xp, Pp, C = sym["predict"]
+        args = [sym["carry"], sym["data"], xi, q, r_std]
+        carry_next = ca.vertcat(xp, ca.vec(Pp))
+        self._full = ca.Function("step", args, [carry_next, ca.vertcat(
+            flat_update(ca, sym["update"]), ca.vec(C))]).mapaccum("filter", BLOCK)
+        self._nll = ca.Function("step_nll", args, [carry_next, sym["update"][4]]).mapaccum(
+            "filter_nll", BLOCK)
+        self.sizes = layout(self.N, self.k, r, substeps)
+
+    def objective(self, records: list[LikelihoodRecord]):
+        """CasADi Function ``(ξ (support), q (N), r (k)) -> (mean nll, its gradient)`` over
+        the weighted samples of ``records`` (the mean over their total weight)."""
+        ca = _casadi()
+        xi, q, r = ca.MX.sym("xi", int(self.support.sum())), ca.MX.sym("q", self.N), \
+            ca.MX.sym("r", self.k)
+        total, weight = 0, sum(float(rec.weights.sum()) for rec in records)
+        for rec in records:
+            columns, weights = _padded(rec.data, rec.weights)
+            carry = ca.MX(ca.DM(np.concatenate([rec.x0, rec.P0.ravel(order="F")])))
+            for i in range(0, columns.shape[1], BLOCK):
+                if not weights[i:].any():
+                    break
+                after, nll = self._nll(carry, ca.DM(columns[:, i:i + BLOCK]), xi, q, r)
+                total = total + ca.mtimes(nll, ca.DM(weights[i:i + BLOCK]))
+                carry = after[:, -1]
+        total = total / max(weight, 1.0)
+        grads = ca.gradient(total, ca.vertcat(xi, q, r))
+        return ca.Function("objective", [xi, q, r], [total, grads])
+
+    def run(self, record: LikelihoodRecord, coef, q, r):
+        """Step outputs and predictions of the filter over ``record`` (numeric), as
+        :func:`~discrepancy.estimation.records.assemble_result` takes them; ``coef``: the
+        full ``(n, p)`` coefficients (those of the support are used)."""
+        extra = [np.asarray(coef, dtype=float)[self.support], np.asarray(q, dtype=float),
+                 np.asarray(r, dtype=float)]
+        return run_blocks(self._full, record.x0, record.P0, record.data,
+                          self.sizes["out"], extra)
+
+
+def _padded(data, weights):
+    m = len(data)
+    padded = -(-m // BLOCK) * BLOCK
+    columns = np.zeros((data.shape[1], padded))
+    columns[:, :m] = data.T
+    w = np.zeros(padded)
+    w[:m] = weights
+    return columns, w

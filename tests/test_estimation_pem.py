@@ -1,0 +1,146 @@
+"""Prediction-error fits recover known coefficients and noise levels of simulated systems
+with process noise, an unmeasured disturbance and the velocity unmeasured."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import discrepancy as dc
+from discrepancy.symbolic import symbol
+
+pytest.importorskip("casadi")
+
+POS, VEL, U = symbol("pos"), symbol("vel"), symbol("u")
+TRUE = {"vel": -0.3, "pos^3": -0.5}
+
+
+def oscillator(seed, T=100.0, dt=0.05, q=0.02, r=0.01, push=0.0, every=15.0):
+    """``pos' = vel``, ``vel' = -pos - 0.1 vel + u - 0.3 vel - 0.5 pos³ + d + noise``:
+    fine RK4 steps with white process noise of intensity ``q`` on ``vel'``, a push ``d``
+    that jumps to a new random level every ``every`` seconds, the position measured with
+    noise ``r``; the input is a sum of sines held over each sample."""
+    rng = np.random.default_rng(seed)
+    m, fine = int(round(T / dt)), 10
+    t = np.arange(m) * dt
+    freqs, phases = np.linspace(0.05, 1.0, 12), rng.uniform(0, 2 * np.pi, 12)
+    u = 1.2 * np.sin(2 * np.pi * freqs * t[:, None] + phases).sum(axis=1) / np.sqrt(6)
+    levels = push * rng.standard_normal(int(T // every) + 2)
+    levels[0] = 0.0
+    d = levels[(t // every).astype(int)]
+
+    def f(x, k):
+        return np.array([x[1], -x[0] - 0.4 * x[1] - 0.5 * x[0] ** 3 + u[k] + d[k]])
+
+    x, h, states = np.zeros(2), dt / fine, []
+    for k in range(m):
+        states.append(x.copy())
+        for _ in range(fine):
+            k1 = f(x, k)
+            k2 = f(x + h / 2 * k1, k)
+            k3 = f(x + h / 2 * k2, k)
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + f(x + h * k3, k))
+            x[1] += q * np.sqrt(h) * rng.standard_normal()
+    y = np.array(states)[:, :1] + r * rng.standard_normal((m, 1))
+    return t, u[:, None], y, np.array(states), d
+
+
+def model(library, **kw):
+    return dc.DiscrepancyModel(prior=[VEL, -POS - 0.1 * VEL + U], state_names=["pos", "vel"],
+                               input_names=["u"], feature_library=library,
+                               constraints=dc.Constraints(exact_equations=["pos"]), **kw)
+
+
+def terms(m):
+    names = m.get_feature_names()
+    return {names[j]: float(c) for j, c in enumerate(m.coef_[1]) if c != 0}
+
+
+@pytest.mark.parametrize("pos_noise", [None, 0.0])
+def test_known_terms_and_noise_levels_are_recovered(pos_noise):
+    t, u, y, _, _ = oscillator(0, T=100.0, q=0.05)
+    y[5::10] = np.nan                                # a tenth of the samples missing
+    m = model(dc.CustomLibrary([VEL, POS ** 3]), optimizer=dc.STLSQ(threshold=1e-6))
+    noise = None if pos_noise is None else [pos_noise, np.nan]   # NaN: fitted
+    m.fit_prediction_error(y, t, u=u, outputs=["pos"], u_hold="zoh", substeps=2,
+                           process_noise=noise)
+    found = terms(m)
+    assert set(found) == set(TRUE)
+    for name, value in TRUE.items():
+        assert found[name] == pytest.approx(value, rel=0.05), found
+    assert m.process_noise_["pos"] < 1e-3 and (pos_noise is None or
+                                               m.process_noise_["pos"] == 0.0)
+    assert m.process_noise_["vel"] == pytest.approx(0.05, rel=0.2)
+    assert m.measurement_noise_["pos"] == pytest.approx(0.01, rel=0.1)
+    assert m.x0_.shape == (2,) and abs(m.x0_[0]) < 0.03
+
+
+@pytest.mark.slow
+def test_terms_are_chosen_and_a_push_is_estimated_where_output_error_is_biased():
+    t, u, y, _, d = oscillator(1, T=300.0, push=0.5)
+    m = model(dc.PolynomialLibrary(3, variables=["pos", "vel"]))
+    m.fit_prediction_error(y, t, u=u, outputs=["pos"], disturbances=["vel"], u_hold="zoh",
+                           substeps=2)
+    found = terms(m)
+    assert set(found) == set(TRUE), found
+    for name, value in TRUE.items():
+        assert found[name] == pytest.approx(value, rel=0.02), found
+    path = m.prediction_error_.path
+    assert [s.n_terms for s in path] == list(range(10, -1, -1))
+    # the fitted model's filter estimates the push it was never told about
+    kf = m.kalman_filter()
+    xs, _ = kf.smooth(kf.filter(y, t, u=u))
+    assert kf.state_names == ["pos", "vel", "d_vel"]
+    assert np.sqrt(np.mean((xs[100:, 2] - d[100:]) ** 2)) < 0.25 * np.std(d)
+    # output error on the same data bends the discrepancy to explain the push
+    oe = model(dc.CustomLibrary([VEL, POS ** 3]), optimizer=dc.STLSQ(threshold=1e-6))
+    oe.fit_outputs(y, t, u=u, outputs=["pos"], u_hold="zoh", substeps=2)
+    biased = terms(oe)
+    assert max(abs(biased[n] / v - 1) for n, v in TRUE.items()) > 0.05, biased
+
+
+def test_a_numeric_threshold_drops_small_terms():
+    t, u, y, _, _ = oscillator(2, T=60.0, q=0.05)
+    m = model(dc.CustomLibrary([VEL, POS ** 3, sp.Integer(1)]), optimizer=dc.STLSQ(threshold=0.1))
+    m.fit_prediction_error(y, t, u=u, outputs=["pos"], u_hold="zoh", substeps=2)
+    assert set(terms(m)) == set(TRUE)
+    assert m.prediction_error_.path == [] and m.prediction_error_.chosen is None
+
+
+def lorenz_record(seed=0, m=2000, dt=0.01, q=0.5, r=0.1):
+    """20 s of the chaotic Lorenz system with process noise on y and z; x, y measured."""
+    rng = np.random.default_rng(seed)
+
+    def f(s):
+        return np.array([10 * (s[1] - s[0]), s[0] * (28 - s[2]) - s[1],
+                         s[0] * s[1] - 8 / 3 * s[2]])
+
+    s, h, out = np.array([1.0, 1.0, 20.0]), dt / 10, []
+    for k in range(300 + m):
+        if k >= 300:
+            out.append(s.copy())
+        for _ in range(10):
+            k1 = f(s)
+            k2 = f(s + h / 2 * k1)
+            k3 = f(s + h / 2 * k2)
+            s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + f(s + h * k3))
+            s[1:] += q * np.sqrt(h) * rng.standard_normal(2)
+    return np.arange(m) * dt, np.array(out)[:, :2] + r * rng.standard_normal((m, 2))
+
+
+@pytest.mark.slow
+def test_a_chaotic_system_with_a_hidden_state():
+    """Lorenz with sigma = 8 in the prior (truth 10) and z unmeasured: a record 20 s long
+    (about 20 Lyapunov times, beyond any free simulation) gives x' = prior - 2 x + 2 y."""
+    t, y = lorenz_record()
+    x_, y_, z_ = (symbol(n) for n in "xyz")
+    m = dc.DiscrepancyModel(prior=[8 * (y_ - x_), x_ * (28 - z_) - y_, x_ * y_ - 8 * z_ / 3],
+                            state_names=["x", "y", "z"],
+                            feature_library=dc.PolynomialLibrary(1, variables=["x", "y"]),
+                            constraints=dc.Constraints(exact_equations=["y", "z"]))
+    m.fit_prediction_error(y, t, outputs=["x", "y"], substeps=2)
+    names = m.get_feature_names()
+    found = {names[j]: float(c) for j, c in enumerate(m.coef_[0]) if c != 0}
+    assert set(found) == {"x", "y"}, found
+    assert found == pytest.approx({"x": -2.0, "y": 2.0}, rel=0.02)
+    assert m.measurement_noise_["y"] == pytest.approx(0.1, rel=0.25)
