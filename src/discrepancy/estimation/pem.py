@@ -56,6 +56,10 @@ def fit_prediction_error(model, y, t, u, *, outputs, disturbances, process_noise
                          tolerance, progress):
     """See :meth:`DiscrepancyModel.fit_prediction_error`; returns ``(setup, fit)``."""
     _check_path_options(max_terms, holdout, tolerance)
+    if model.discrete_time:
+        raise ParameterError("fit_prediction_error fits continuous-time models; for a map, "
+                             "fit the successors (fit(x, x_dot=x_next)) and filter with "
+                             "ExtendedKalmanFilter(model, ...)")
     ys, ts, us = record_inputs(y, t, u)
     r = 0 if us[0] is None else (1 if np.ndim(us[0]) == 1 else int(np.shape(us[0])[1]))
     setup = model.make_setup(_n_states(model, x0), r)
