@@ -110,6 +110,7 @@ CASES = [
     Case("estimation", "fit with a process covariance", lambda: pem(process_noise=np.eye(2)), raises(ShapeError, r"process_noise must be 2 standard deviations \(one per channel, NaN for those to fit\) for a prediction-error fit")),
     Case("estimation", "fit with an unknown disturbance", lambda: pem(disturbances=["x9"]), raises(UnknownNameError, r"disturbances\[0\] = 'x9' is not a state")),
     Case("estimation", "fit with u positional", lambda: pem_model().fit_prediction_error(Y, 0.05, np.zeros((100, 1))), raises(ParameterError, r"fit_prediction_error: arguments after t .* must be passed by name")),
+    Case("estimation", "fit of a discrete-time model", lambda: dc.DiscrepancyModel(discrete_time=True).fit_prediction_error(Y, outputs=[0]), raises(ParameterError, r"fit_prediction_error fits continuous-time models")),
     Case("estimation", "kalman_filter of an unknown kind", lambda: pem_model().fit(np.c_[Y, Y], 0.05, u=np.zeros((100, 1))).kalman_filter("pf"), raises(ParameterError, r"kind must be 'ekf' or 'ukf'; got 'pf'")),
     Case("estimation", "kalman_filter without noise levels", lambda: pem_model().fit(np.c_[Y, Y], 0.05, u=np.zeros((100, 1))).kalman_filter(), raises(NotFittedError, r"kalman_filter needs the noise levels of fit_prediction_error")),
 ]

@@ -62,7 +62,7 @@ class KalmanFilter:
         validate_params(type(self).__name__, {"substeps": substeps},
                         {"substeps": [Interval(Integral, 1, 1000)]})
         self.substeps, self.u_hold = int(substeps), check_hold(u_hold)
-        size = np.shape(process_noise)[0] if np.ndim(process_noise) else None
+        size = _size(process_noise)
         n_disturbed = 0 if disturbances is None else \
             (1 if isinstance(disturbances, (str, int)) else len(disturbances))
         self.dynamics = with_disturbances(dynamics_of(
@@ -257,6 +257,14 @@ class UnscentedKalmanFilter(KalmanFilter):
             return km.ukf_update(self._numpy, x, P, y, w, self.R, self._weights)
         except np.linalg.LinAlgError:
             return x, P, y, np.eye(len(y)), np.nan
+
+
+def _size(value) -> int | None:
+    """Leading size of a noise level (the number of states of a callable model), if any."""
+    try:
+        return np.shape(value)[0] if np.ndim(value) else None
+    except ValueError:                      # ragged: the noise check names it later
+        return None
 
 
 def _vector(name, value, size) -> np.ndarray:

@@ -55,18 +55,19 @@ def fit_prediction_error(model, y, t, u, *, outputs, disturbances, process_noise
                          measurement_noise, x0, u_hold, substeps, max_terms, holdout,
                          tolerance, progress):
     """See :meth:`DiscrepancyModel.fit_prediction_error`; returns ``(setup, fit)``."""
-    from ..models.output_error import n_states_of
-    from ..models.output_fit import _allowed, _check_options
-
-    _check_options(max_terms, holdout, tolerance)
+    _check_path_options(max_terms, holdout, tolerance)
+    if model.discrete_time:
+        raise ParameterError("fit_prediction_error fits continuous-time models; for a map, "
+                             "fit the successors (fit(x, x_dot=x_next)) and filter with "
+                             "ExtendedKalmanFilter(model, ...)")
     ys, ts, us = record_inputs(y, t, u)
     r = 0 if us[0] is None else (1 if np.ndim(us[0]) == 1 else int(np.shape(us[0])[1]))
-    setup = model.make_setup(n_states_of(model, x0), r)
+    setup = model.make_setup(_n_states(model, x0), r)
     measurement = Measurement(outputs, list(setup.state_names))
     equations = disturbed_equations(disturbances, list(setup.state_names))
     problem = _problem(setup, measurement, equations, (ys, ts, us), process_noise,
                        measurement_noise, x0, u_hold, substeps)
-    allowed = _allowed(setup)
+    allowed = _allowed_terms(setup)
     train, test = rows_of(problem.records, holdout)
     everything, _ = rows_of(problem.records, None)
     none = np.zeros_like(allowed)
@@ -86,6 +87,43 @@ def fit_prediction_error(model, y, t, u, *, outputs, disturbances, process_noise
     coef[~support] = 0.0
     return setup, _result(problem, support, coef, noise, value, path, chosen, u_hold,
                           substeps)
+
+
+def _check_path_options(max_terms, holdout, tolerance):
+    def number(value):
+        return isinstance(value, (int, float, np.integer, np.floating)) and \
+            not isinstance(value, bool)
+
+    if max_terms is not None and not (number(max_terms) and int(max_terms) == max_terms >= 1):
+        raise ParameterError(f"max_terms must be a positive integer or None; got {max_terms!r}")
+    if not (number(holdout) and 0.05 <= holdout <= 0.5):
+        raise ParameterError(f"holdout must be a fraction in [0.05, 0.5]; got {holdout!r}")
+    if tolerance is not None and not (number(tolerance) and 0 <= tolerance <= 1):
+        raise ParameterError(f"tolerance must be None (one standard error) or a relative "
+                             f"excess in [0, 1]; got {tolerance!r}")
+
+
+def _n_states(model, x0) -> int:
+    """The model's number of states: its names, its symbolic prior or the given ``x0``."""
+    names, prior = model.state_names, model.prior
+    if names is not None:
+        return len([names] if isinstance(names, str) else names)
+    if isinstance(prior, (list, tuple)):
+        return len(prior)
+    if x0 is None:
+        raise ParameterError("the number of states is unknown: give state_names, a prior as "
+                             "a list of sympy expressions, or x0")
+    return int(np.shape(x0)[-1])
+
+
+def _allowed_terms(setup) -> np.ndarray:
+    """``(n, p)`` bool: the terms the constraints allow in each equation (all without)."""
+    constraints = getattr(setup.optimizer, "constraints", None)
+    if constraints is not None and constraints.has_linear:
+        raise ParameterError("prediction-error fits honour term masks (exact_equations, "
+                             "only) but not linear equalities or inequalities")
+    full = np.ones((setup.n_states, setup.n_features), bool)
+    return full if constraints is None else constraints.allowed & full
 
 
 def _problem(setup, measurement, equations, data, process_noise, measurement_noise,
