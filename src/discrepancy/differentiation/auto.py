@@ -142,7 +142,7 @@ class AutoSmoothing(Differentiator):
 
     def _compute(self, x, t):
         method, _ = self.choose([(t, x)])
-        return method(x, t)
+        return method.smooth_and_differentiate(x, t)
 
 
 def _first_rows(series, budget: int) -> list[tuple[np.ndarray, np.ndarray]]:

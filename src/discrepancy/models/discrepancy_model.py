@@ -131,7 +131,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         trajectories = as_trajectories(x, t)
         n = trajectories[0].x.shape[1]
         method = self.make_setup(n, 0, sample=trajectories).differentiation
-        out = [method(tr.x, tr.t)[1] for tr in trajectories]
+        out = [method.smooth_and_differentiate(tr.x, tr.t)[1] for tr in trajectories]
         return out if isinstance(x, (list, tuple)) else out[0]
 
     def make_setup(self, n_states: int, n_inputs: int, *, sample=None) -> FitSetup:

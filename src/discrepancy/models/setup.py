@@ -83,13 +83,31 @@ class FitSetup:
             return discrete_rows(self, trajectory)
         if trajectory.x_dot is None and isinstance(self.differentiation, WeakForm):
             return self._weak_rows(trajectory)
+        u = trajectory.u
         if trajectory.x_dot is None:
-            xs, xd = self.differentiation(trajectory.x, trajectory.t)
+            xs, xd = self.differentiation.smooth_and_differentiate(trajectory.x, trajectory.t)
+            kept = self._kept(trajectory)  # ends a method leaves undefined (drop_endpoints)
+            xs, xd, u = xs[kept], xd[kept], None if u is None else u[kept]
         else:
             xs, xd = trajectory.x, trajectory.x_dot
-        y = xd - self.prior(xs, trajectory.u)
-        z = xs if trajectory.u is None else np.hstack([xs, trajectory.u])
+        y = xd - self.prior(xs, u)
+        z = xs if u is None else np.hstack([xs, u])
         return z, y, xd
+
+    def _kept(self, trajectory: Trajectory) -> slice:
+        """The rows of ``trajectory`` that give regression rows (all but the ends a
+        differentiation method with ``drop_endpoints`` leaves undefined)."""
+        if trajectory.x_dot is not None or self.discrete_time:
+            return slice(None)
+        first, last = self.differentiation.dropped_rows
+        return slice(first, trajectory.n_samples - last)
+
+    def row_weights(self, trajectory: Trajectory) -> np.ndarray | None:
+        """The sample weights from the first of :meth:`rows`' rows on (``None`` when
+        unweighted; a map's last sample, which has no successor, gives no row)."""
+        if trajectory.weight is None:
+            return None
+        return trajectory.weight[self._kept(trajectory)]
 
     def _weak_rows(self, trajectory: Trajectory):
         from ..resources import CHUNKED, check_memory, n_bytes
@@ -161,7 +179,8 @@ class FitSetup:
 
         stats = self.new_statistics() if into is None else into
         z, y, x_dot = self.rows(trajectory)
-        weight = None if trajectory.weight is None else trajectory.weight[:len(z)]
+        weight = self.row_weights(trajectory)
+        weight = None if weight is None else weight[:len(z)]
         return accumulate(stats, self.transform, z, y, x_dot, weight, names=self.names)
 
 

@@ -111,12 +111,13 @@ def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int 
     blocks, folds, row = [], [], 0
     for tr in trajectories:
         z, y, xd = setup.rows(tr)
+        row_weight = setup.row_weights(tr)
         start = 0
         while start < len(z):  # blocks on the grid of data rows, so they nest in segments
             stop = min(len(z), start + length - (row + start) % length)
             stats = GramStatistics(setup.n_features, setup.n_states)
             rows = slice(start, stop)
-            weight = None if tr.weight is None else tr.weight[rows]
+            weight = None if row_weight is None else row_weight[rows]
             blocks.append(stats.add(setup.transform(z[rows]), y[rows], xd[rows], weight))
             folds.append(((row + start) // segment) % n_folds)
             start = stop
