@@ -119,6 +119,8 @@ def choice_line(model) -> str:
     choice = getattr(model, "differentiation_choice_", None)
     if not choice:
         return ""
-    noise = ", ".join(f"{v:.3g}" for v in choice.get("noise_std", []))
-    return (f"# derivatives: {model.differentiation_method_!r}, chosen by {choice['chosen_by']} "
-            f"from the data; noise std of the states ≈ [{noise}]")
+    line = f"# derivatives: {model.differentiation_method_!r}, chosen by {choice['chosen_by']}"
+    if "noise_std" not in choice:  # a fallback for short records estimates no noise
+        return line
+    noise = ", ".join(f"{v:.3g}" for v in choice["noise_std"])
+    return f"{line} from the data; noise std of the states ≈ [{noise}]"
