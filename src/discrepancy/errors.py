@@ -93,6 +93,11 @@ class ShortRecordWarning(UserWarning):
     threshold); the message says what was used instead (:mod:`discrepancy.short_records`)."""
 
 
+class NameConventionWarning(UserWarning):
+    """A name refers to a default variable name that means another variable in PySINDy's
+    0-based names (``x1`` is the first state here, the second in PySINDy)."""
+
+
 class CoarseSamplingWarning(UserWarning):
     """The data have too few samples per period for the chosen differentiation method."""
 

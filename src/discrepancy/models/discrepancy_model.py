@@ -8,14 +8,15 @@ import numpy as np
 from ..base import Estimator
 from ..constraints import InstanceOf, Integral, Interval, Predicate, is_callable, validate_params
 from ..data.chunks import data_kind
-from ..data.trajectory import Trajectory, as_2d, as_trajectories
+from ..data.trajectory import Trajectory, as_2d, as_trajectories, is_number
 from ..data.validation import as_float_array, check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
+from ..optimizers.wrapped import REGRESSOR
 from ..symbolic import compile_numpy, feature_name
-from .arguments import keywords_only
+from .arguments import keywords_only, metadata_routing, require_t
 from .checks import checked_discrepancy, pairs
 from .output_methods import OutputErrorMethods
 from .setup import FitSetup, resolve_setup
@@ -63,7 +64,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         "prior": [None, is_callable, Predicate(lambda v: isinstance(v, (list, tuple)) and v,
                                                "a list of sympy expressions")],
         "feature_library": [None, InstanceOf(FeatureLibrary, "a feature library"), _SPEC],
-        "optimizer": [None, InstanceOf(Optimizer, "an Optimizer"), _SPEC],
+        "optimizer": [None, InstanceOf(Optimizer, "an Optimizer"), _SPEC, REGRESSOR],
         "differentiation_method": [None, InstanceOf(Differentiator, "a Differentiator"), _SPEC],
         "state_names": _NAMES, "input_names": _NAMES,
         "constraints": [None, InstanceOf(Constraints, "a discrepancy.Constraints")],
@@ -85,27 +86,34 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         self.discrete_time = discrete_time
 
     # ----------------------------------------------------------------- fitting
-    def fit(self, x, t=None, *args, u=None, x_dot=None, sample_weight=None) -> DiscrepancyModel:
+    def fit(self, x, t=None, *args, u=None, x_dot=None, sample_weight=None,
+            feature_names=None) -> DiscrepancyModel:
         """Learn the discrepancy from measured states.
 
         Args:
             x: states ``(m, n)``, a list of trajectories (never differentiated across
                 joins), a dask array, or chunks (see :mod:`discrepancy.streaming`).
-            t: time step or times ``(m,)`` (or a list per trajectory); default step 1.
-            u: inputs ``(m, r)`` or a list per trajectory (keyword only).
+            t: time step or times ``(m,)`` (or a list per trajectory); required unless
+                ``x_dot`` is given or the model is discrete-time (chunks may carry times).
+            u: inputs ``(m, r)``, a list per trajectory, or one number (a constant input).
             x_dot: measured derivatives ``(m, n)``; skips numerical differentiation.
             sample_weight: weight of each sample in the regression, ``(m,)``, or a list per
                 trajectory of arrays or numbers (a number weighs a whole trajectory). Chunked
                 data carry them in the chunks (``Chunk(x, weight=...)``).
+            feature_names: names of the states and then the inputs for this fit (PySINDy's
+                ``fit(feature_names=...)``; they replace ``state_names``/``input_names``).
 
         Returns:
             self
         """
-        keywords_only("fit", args, "u, x_dot and sample_weight")
+        keywords_only("fit", args, "u, x_dot, sample_weight and feature_names")
         kind = data_kind(x)
-        if kind != "arrays" and sample_weight is not None:
+        if kind != "arrays" and (sample_weight is not None or feature_names is not None):
             raise ParameterError("with chunked or dask x, give sample weights inside the chunks "
-                                 "(Chunk(x, weight=...)); dask arrays take none")
+                                 "(Chunk(x, weight=...); dask arrays take none) and names as "
+                                 "the model's state_names and input_names")
+        if kind != "chunks":  # chunks may carry their own times
+            require_t("fit", t, needed=x_dot is None and not self.discrete_time)
         if kind == "dask":
             from ..distributed import dask_statistics
             setup, stats = dask_statistics(self, x, t=t, u=u, x_dot=x_dot)
@@ -116,7 +124,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
             trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
             first = trajectories[0]
             setup = self.make_setup(first.x.shape[1], 0 if first.u is None else first.u.shape[1],
-                                    sample=trajectories)
+                                    sample=trajectories, feature_names=feature_names)
             stats = setup.new_statistics()
             for trajectory in trajectories:
                 setup.statistics(trajectory, into=stats)
@@ -128,23 +136,26 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         ``x`` itself; PySINDy's ``differentiate``)."""
         if self.discrete_time:
             raise ParameterError("a discrete-time model has no derivatives to estimate")
+        require_t("differentiate", t, needed=True)
         trajectories = as_trajectories(x, t)
         n = trajectories[0].x.shape[1]
         method = self.make_setup(n, 0, sample=trajectories).differentiation
         out = [method.smooth_and_differentiate(tr.x, tr.t)[1] for tr in trajectories]
         return out if isinstance(x, (list, tuple)) else out[0]
 
-    def make_setup(self, n_states: int, n_inputs: int, *, sample=None) -> FitSetup:
+    def make_setup(self, n_states: int, n_inputs: int, *, sample=None,
+                   feature_names=None) -> FitSetup:
         """The frozen set-up (names, prior, library, optimizer, differentiation) of this
         model's parameters for ``n_states`` states and ``n_inputs`` inputs. Its
         :meth:`~FitSetup.statistics` of any number of trajectories, summed, go to
         :meth:`fit_statistics`. ``sample`` (a list of
         :class:`~discrepancy.data.Trajectory`) is needed when the differentiation method
-        is chosen from the data (the default)."""
+        is chosen from the data (the default); ``feature_names`` (states then inputs)
+        replace the model's names."""
         self._validate_params()
         validate_params("make_setup", {"n_states": n_states, "n_inputs": n_inputs},
                         {"n_states": [Interval(Integral, 1)], "n_inputs": [Interval(Integral, 0)]})
-        return resolve_setup(self, n_states, n_inputs, sample)
+        return resolve_setup(self, n_states, n_inputs, sample, feature_names)
 
     def fit_statistics(self, stats: GramStatistics, setup: FitSetup) -> DiscrepancyModel:
         """Fit from Gram statistics computed with ``setup`` (see :meth:`make_setup`);
@@ -182,12 +193,29 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         converged = getattr(optimizer, "converged_", None)
         self.converged_ = None if converged is None else dict(zip(
             self.state_names_, np.asarray(converged, dtype=bool).tolist(), strict=True))
+        self._compile()
+
+    def _compile(self) -> None:
+        """Compile the active terms of ``coef_`` (kept as ``_compiled_coef`` to notice edits)."""
         active = np.flatnonzero(np.any(self.coef_ != 0, axis=0))
-        functions = setup.library.user_functions()
+        functions = self.setup_.library.user_functions()
         self._active_terms = [compile_numpy(self.feature_expressions_[j], self.variable_names_,
                                             functions) for j in active]
         self._active_coef = self.coef_[:, active].T
+        self._compiled_coef = self.coef_.copy()
         self._compiled_steps = {}   # CasADi steppers of these coefficients, by substeps
+
+    def _sync(self) -> None:
+        """Recompile when ``coef_`` was edited in place since the fit (``coefficients()``
+        returns it, as PySINDy's does, so such edits change predict and simulate)."""
+        if not np.array_equal(self.coef_, self._compiled_coef):
+            if np.shape(self.coef_) != self._compiled_coef.shape or \
+                    not np.all(np.isfinite(self.coef_)):
+                raise ShapeError(f"coef_ must stay finite with shape "
+                                 f"{self._compiled_coef.shape}; it was changed to "
+                                 f"{describe(self.coef_)}")
+            self.coef_ = np.asarray(self.coef_, dtype=float)
+            self._compile()
 
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(Z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m`` ``(m, n)``."""
@@ -201,6 +229,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
 
     def _variables(self, x, u) -> tuple[np.ndarray, np.ndarray | None]:
         self.check_is_fitted()
+        self._sync()
         x = as_2d("x", x, n_cols=self.n_states_, allow_1d=self.n_states_ == 1)
         if self.n_inputs_ == 0:
             if u is not None:
@@ -209,6 +238,8 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         if u is None:
             raise ShapeError(f"u is required: the model was fitted with {self.n_inputs_} inputs "
                              f"{self.input_names_}")
+        if is_number(u):  # one number: a constant input (PySINDy broadcasts it too)
+            u = np.full((x.shape[0], 1), u)
         return x, as_2d("u", u, n_rows=x.shape[0], n_cols=self.n_inputs_, allow_1d=True)
 
     def _g(self, z: np.ndarray) -> np.ndarray:
@@ -238,8 +269,9 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         self.check_is_fitted()
         return int(np.count_nonzero(self.coef_))
 
-    def simulate(self, x0, t, *args, u=None, compiled: bool = True,
-                 **integrator_kws) -> np.ndarray:
+    def simulate(self, x0, t, *args, u=None, compiled: bool = True, integrator=None,
+                 integrator_kws=None, interpolator=None, interpolator_kws=None,
+                 stop_condition=None, **options) -> np.ndarray:
         """Trajectory of the hybrid model from ``x0`` ``(n,)`` at times ``t`` ``(k,)``.
 
         ``u`` is an array ``(k, r)`` sampled at ``t`` (between samples ``u_hold="linear"``,
@@ -252,19 +284,38 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         be expressed in it (``compiled=False`` steps in Python; same numbers): the fast way
         to simulate long records with measured inputs. A simulation that blows up or runs
         out of its evaluation budget raises SimulationError with the partial trajectory.
-        Returns ``(k, n)``. A discrete-time model iterates its map: ``t`` is the number of
-        states to return (row 0 is ``x0``) and ``u`` has one row (or call ``u(k)``) per step.
+        Returns ``(k, n)``. PySINDy's ``integrator`` (``"solve_ivp"``, ``"odeint"``),
+        ``integrator_kws``, ``interpolator`` and ``interpolator_kws`` are taken as PySINDy
+        takes them (:mod:`discrepancy.models.simulate_arguments`). A discrete-time model
+        iterates its map: ``t`` is the number of states to return (row 0 is ``x0``), ``u``
+        has one row (or call ``u(k)``) per step and ``stop_condition(x) -> bool`` ends the
+        run at the first state for which it is true (that state included), as in PySINDy.
         """
         keywords_only("simulate", args, "u")
         self.check_is_fitted()
+        self._sync()
         x0 = check_vector("x0", x0, self.n_states_)
         validate_params("simulate", {"compiled": compiled}, {"compiled": [bool]})
-        if not self.discrete_time:
-            from .simulation import check_options
-            check_options(integrator_kws)  # before any work that depends on them
         if self.discrete_time:
             from .discrete import iterate
-            return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_)
+            given = {k for k, v in dict(integrator=integrator, integrator_kws=integrator_kws,
+                                        interpolator=interpolator,
+                                        interpolator_kws=interpolator_kws).items()
+                     if v is not None} | set(options)
+            if given:
+                raise ParameterError(f"simulate of a discrete-time model takes x0, t (steps), "
+                                     f"u and stop_condition; got {sorted(given)}")
+            return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_,
+                           stop_condition=stop_condition)
+        if stop_condition is not None:
+            raise ParameterError("stop_condition is for discrete-time models (as in PySINDy); "
+                                 "a continuous simulation runs over all of t")
+        from .simulate_arguments import integrator_options, interpolated_input
+        from .simulation import check_options
+
+        integrator_kws = integrator_options(integrator, integrator_kws, options)
+        u = interpolated_input(u, t, interpolator, interpolator_kws)
+        check_options(integrator_kws)  # before any work that depends on them
         if "method" not in integrator_kws and self._has_jumps():
             integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
         if integrator_kws.get("method") == "rk4" and compiled and not callable(u):
@@ -281,10 +332,12 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         ``substeps`` per sample, the input held by ``u_hold``). Compare with ``x[steps:]``."""
         keywords_only("predict_ahead", args, "u and the options")
         self.check_is_fitted()
+        self._sync()
         from .prediction import checked_states, predict_ahead
 
+        require_t("predict_ahead", t, needed=True)
         x = checked_states(self, x, u)
-        return predict_ahead(self._rhs_one, x, 1.0 if t is None else t, u,
+        return predict_ahead(self._rhs_one, x, t, u,
                              n_inputs=self.n_inputs_, steps=steps, u_hold=u_hold,
                              substeps=substeps)
 
@@ -304,9 +357,11 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
 
     # ----------------------------------------------------------------- output
     def coefficients(self) -> np.ndarray:
-        """``Ξ`` as ``(n_states, n_features)``, PySINDy's layout."""
+        """``Ξ`` as ``(n_states, n_features)``, PySINDy's layout: the model's own array, as
+        in PySINDy, so editing it in place changes the model (``predict``, ``simulate``,
+        ``equations``, files); copy it to keep a snapshot."""
         self.check_is_fitted()
-        return self.coef_.copy()
+        return self.coef_
 
     def get_feature_names(self) -> list[str]:
         self.check_is_fitted()
@@ -338,15 +393,28 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         if line:
             print(line)
 
-    def score(self, x, t=None, *args, u=None, x_dot=None, metric="r2") -> float:
+    def score(self, x, t=None, *args, u=None, x_dot=None, metric="r2", **metric_kws):
         """Goodness of fit on data: ``"r2"`` (mean over states) or ``"rmse"`` of the
-        derivatives, a callable ``metric(truth, prediction)`` of them (e.g. a
+        derivatives, a callable ``metric(truth, prediction, **metric_kws)`` of them (e.g. a
         ``sklearn.metrics`` function), or ``"trajectory"``: ``‖x_sim − x‖ / ‖x‖``
-        simulating from ``x[0]`` (one trajectory)."""
+        simulating from ``x[0]`` (one trajectory). ``t`` is required unless ``x_dot`` is
+        given (or the model is discrete-time). ``metric_kws`` go to the metric, as in
+        PySINDy (with ``"r2"``: to ``sklearn.metrics.r2_score``, e.g.
+        ``multioutput="raw_values"``)."""
         from .scoring import score
         keywords_only("score", args, "u, x_dot and metric")
         self.check_is_fitted()
-        return score(self, x, t, u, x_dot, metric=metric)
+        self._sync()
+        require_t("score", t, needed=not self.discrete_time and
+                  (x_dot is None or metric == "trajectory"))
+        return score(self, x, t, u, x_dot, metric=metric, metric_kws=metric_kws)
+
+    def get_metadata_routing(self):
+        """scikit-learn's metadata routing: with
+        ``sklearn.set_config(enable_metadata_routing=True)``, ``GridSearchCV(model,
+        grid).fit(x, t=dt)`` gives every fold's ``fit`` and ``score`` its ``t`` (and ``u``,
+        ``x_dot``; ``sample_weight`` to ``fit``), split like ``x``."""
+        return metadata_routing(type(self).__name__)
 
     def bootstrap(self, x, t=None, *args, u=None, x_dot=None, n_resamples: int = 200,
                   block_length: int | None = None, method: str = "wild", seed: int = 0,
@@ -361,6 +429,7 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         """
         from .uncertainty import bootstrap
         keywords_only("bootstrap", args, "u, x_dot and the options")
+        require_t("bootstrap", t, needed=x_dot is None and not self.discrete_time)
         return bootstrap(self, x, t, u, x_dot, n_resamples=n_resamples,
                          block_length=block_length, method=method, seed=seed,
                          sample_weight=sample_weight)

@@ -26,6 +26,7 @@ import numpy as np
 from ..constraints import InstanceOf, Integral, Interval, Options, validate_params
 from ..errors import ParameterError
 from ..optimizers import GramStatistics
+from ..optimizers.resampling import from_blocks
 from ..resources import check_memory, n_bytes
 from .checks import model_data
 
@@ -151,18 +152,6 @@ def _wild(gram, rhs, yy, coef, rng):
     return fitted + s[:, None, None] * cross, fit_sq + res_sq + 2 * s[:, None] * mixed
 
 
-def _resampled_statistics(gram, rhs, yy, signal, counts, folds, n_folds, segment):
-    """GramStatistics with folds from per-block sums (``(B, ...)`` arrays)."""
-    stats = GramStatistics(gram.shape[1], rhs.shape[2], n_folds, segment)
-    for f, fold in enumerate(stats.folds):
-        pick = folds == f
-        fold.gram, fold.rhs = gram[pick].sum(0), rhs[pick].sum(0)
-        fold.yy, fold.signal = yy[pick].sum(0), signal[pick].sum(0)
-        fold.count = int(counts[pick].sum())
-    stats._sum_folds()
-    return stats
-
-
 def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
               block_length: int | None = None, method: str = "wild", seed: int = 0,
               sample_weight=None) -> CoefficientUncertainty:
@@ -187,13 +176,12 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
     for r in tqdm(range(n_resamples), desc="bootstrap", disable=None, leave=False):
         if method == "wild":
             b, sq = _wild(gram, rhs, yy, model.coef_, rng)
-            stats = _resampled_statistics(gram, b, sq, signal, counts, folds,
-                                          template.n_folds, template.segment)
+            stats = from_blocks(gram, b, sq, signal, counts, folds, template)
         else:
             w = np.bincount(rng.integers(0, len(gram), len(gram)), minlength=len(gram))
-            stats = _resampled_statistics(gram * w[:, None, None], rhs * w[:, None, None],
-                                          yy * w[:, None], signal * w[:, None], counts * w,
-                                          folds, template.n_folds, template.segment)
+            stats = from_blocks(gram * w[:, None, None], rhs * w[:, None, None],
+                                yy * w[:, None], signal * w[:, None], counts * w, folds,
+                                template)
         opt = copy.deepcopy(model.optimizer_)
         opt.fit_statistics(stats)
         samples[r] = opt.coef_
