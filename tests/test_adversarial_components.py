@@ -187,7 +187,7 @@ CASES = [
     Case("differentiation", "spec with a non-literal", lambda: get_differentiation_method("savitzky_golay(window_length=abc)"), raises(ParameterError, r"window_length must be .*; got 'abc'")),
     Case("differentiation", "spec unclosed", lambda: get_differentiation_method("savitzky_golay(window_length=31"), raises(ParameterError, r"savitzky_golay\(window_length=31")),
     Case("differentiation", "spec with an unknown option", lambda: get_differentiation_method("finite_difference(axis=1)"), raises(ParameterError, r"'finite_difference': FiniteDifference has no parameter 'axis'")),
-    Case("differentiation", "constant x has derivative 0", lambda: diff("finite_difference", np.ones((100, 2)))[1], returns(exact(np.zeros((100, 2))))),
+    Case("differentiation", "constant x has derivative 0", lambda: diff("finite_difference", np.ones((100, 2))), returns(exact(np.zeros((100, 2))))),
     Case("differentiation", "finite differences exact on t^2, non-uniform t", lambda: diff("finite_difference", T_RAGGED[:, None] ** 2, T_RAGGED), returns(exact(2 * T_RAGGED[:, None], 1e-8))),
     Case("differentiation", "Savitzky-Golay exact on a cubic", lambda: diff(dc.SavitzkyGolay(7, 3), T[:, None] ** 3), returns(exact(3 * T[:, None] ** 2, 1e-8))),
     Case("differentiation", "model.differentiate of a map", lambda: dc.DiscrepancyModel(discrete_time=True).differentiate(Z), raises(ParameterError, r"discrete-time model has no derivatives")),

@@ -1,30 +1,30 @@
-"""The adversarial suite tries 688 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 755 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
-| fit | 72 |
+| fit | 79 |
 | prior | 21 |
-| model | 47 |
+| model | 49 |
 | library | 54 |
-| optimizer | 43 |
-| differentiation | 36 |
+| optimizer | 77 |
+| differentiation | 43 |
 | predict | 15 |
-| score | 17 |
+| score | 21 |
 | export | 21 |
-| simulate | 43 |
-| bootstrap | 20 |
+| simulate | 54 |
+| bootstrap | 21 |
 | model file | 50 |
 | io.load | 40 |
-| stream | 36 |
+| stream | 37 |
 | dask | 11 |
 | cli | 45 |
 | energy | 44 |
 | control | 25 |
 | isolated | 48 |
-| total | 688 |
+| total | 755 |
 
-574 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 114 must give the right answer, checked against an
+622 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 133 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 48 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
@@ -43,10 +43,11 @@ import test_adversarial_files
 import test_adversarial_fit
 import test_adversarial_isolated
 import test_adversarial_models
+import test_adversarial_options
 
 TABLES = [test_adversarial_fit, test_adversarial_components, test_adversarial_models,
           test_adversarial_files, test_adversarial_cli, test_adversarial_energy_control,
-          test_adversarial_isolated]
+          test_adversarial_isolated, test_adversarial_options]
 
 
 def test_the_docstring_gives_the_number_of_distinct_rows_per_entry_point():

@@ -126,9 +126,10 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
 
 
 def is_number(value) -> bool:
-    """One real number (not a bool, not an array with dimensions)."""
-    return np.ndim(value) == 0 and value is not None and \
-        np.asarray(value).dtype.kind in "iuf" and not isinstance(value, (bool, np.bool_))
+    """One real number (not a bool, not an array)."""
+    import numbers
+
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def check_weight(name: str, weight, m: int, *, where: str | None = None,

@@ -375,13 +375,15 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         return equations(self, precision, uncertainty)
 
     def print(self, precision: int = 3, *, lhs=None, uncertainty=None) -> None:
-        """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2`` (with
+        """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2`` (a map:
+        ``(x1)[k+1] = ...``; with
         ``± std`` when ``uncertainty`` is given; ``lhs``: a list of left-hand sides to
         print instead of ``(x1)'``, ...), then, when the derivatives were estimated with a
         method chosen from the data, a ``#`` line saying which and why."""
         lines = self.equations(precision, uncertainty=uncertainty)
         if lhs is None:
-            lhs = [f"({name})'" for name in self.state_names_]
+            step = "[k+1]" if self.discrete_time else "'"
+            lhs = [f"({name}){step}" for name in self.state_names_]
         elif not isinstance(lhs, (list, tuple)) or len(lhs) != self.n_states_ or \
                 not all(isinstance(s, str) for s in lhs):
             raise ParameterError(f"lhs must be a list of {self.n_states_} strings (one per "

@@ -102,7 +102,7 @@ def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
     for i, row in enumerate(model.coef_):
         parts = [] if model.prior is None else ["prior"]
         for j, (c, name) in enumerate(zip(row, names, strict=True)):
-            if c != 0:
+            if round(c, precision) != 0:   # terms that print as 0 are left out, as in PySINDy
                 size = f"{abs(c):.{precision}f}"
                 if std is not None:
                     size = f"({size} ± {std[i, j]:.{precision}f})"

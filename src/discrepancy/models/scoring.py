@@ -54,7 +54,10 @@ def score(model, x, t=None, u=None, x_dot=None, *, metric="r2", metric_kws=None)
         return float(np.sqrt(np.mean((truth - pred) ** 2)))
     ss_res = np.sum((truth - pred) ** 2, axis=0)
     ss_tot = np.sum((truth - truth.mean(axis=0)) ** 2, axis=0)
-    return float(np.mean(1 - ss_res / np.where(ss_tot > 0, ss_tot, 1.0)))
+    # a constant derivative scores 1 when predicted exactly, else 0 (scikit-learn's r2_score)
+    r2 = np.where(ss_tot > 0, 1 - ss_res / np.where(ss_tot > 0, ss_tot, 1.0),
+                  np.where(ss_res == 0, 1.0, 0.0))
+    return float(np.mean(r2))
 
 
 def _called(metric, truth, pred, metric_kws):

@@ -39,7 +39,8 @@ class _Stop(Exception):
 
 def _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws):
     adaptive = isinstance(method, str) and method in ADAPTIVE
-    own = SOLVER_OPTIONS if adaptive else ODEINT_OPTIONS if method == "odeint" else ()
+    odeint = isinstance(method, str) and method == "odeint"
+    own = SOLVER_OPTIONS if adaptive else ODEINT_OPTIONS if odeint else ()
     unknown = sorted(set(solver_kws) - set(own))
     if unknown:
         raise ParameterError(f"simulate got unknown option(s) {unknown} for method "

@@ -168,7 +168,13 @@ def get_optimizer(optimizer=None, **params) -> Optimizer:
     scikit-learn regressor (wrapped as PySINDy uses one: :mod:`.wrapped`)."""
     if optimizer is None:
         optimizer, params = "stlsq", {"threshold": "auto", **params}
-    from .wrapped import REGRESSOR, WrappedOptimizer
-    if REGRESSOR.is_satisfied_by(optimizer) and not isinstance(optimizer, (str, dict)):
-        return WrappedOptimizer(optimizer, unbias=False)
+    if is_regressor(optimizer):
+        return OPTIMIZERS.create("wrapped", optimizer=optimizer, unbias=False)
     return OPTIMIZERS.create(optimizer, **params)
+
+
+def is_regressor(value) -> bool:
+    """A scikit-learn style regressor (an instance with ``fit`` and ``get_params``) that is
+    not one of this package's solvers: PySINDy takes one as a model's optimizer."""
+    return not isinstance(value, (type, Optimizer, str)) and callable(getattr(value, "fit", None)) \
+        and callable(getattr(value, "get_params", None))

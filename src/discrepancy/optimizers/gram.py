@@ -121,7 +121,8 @@ class GramStatistics:
             raise ShapeError(f"cannot merge statistics of (p={other.p}, n={other.n}, "
                              f"{other.n_folds} folds of {other.segment} rows) into (p={self.p}, "
                              f"n={self.n}, {self.n_folds} folds of {self.segment} rows)")
-        self.rows = None if self.rows is None or other.rows is None else self.rows + other.rows
+        if other.rows is not None:  # rows are kept beside the sums, not summed with them
+            self.rows = other.rows if self.rows is None else self.rows + other.rows
         if self.folds is not None:
             for mine, theirs in zip(self.folds, other.folds, strict=True):
                 mine += theirs
@@ -138,7 +139,6 @@ class GramStatistics:
         """Sum of two statistics (e.g. from two workers), as a new object."""
         out = self.empty_like()
         out += self
-        out.rows = self.rows
         out += other
         return out
 

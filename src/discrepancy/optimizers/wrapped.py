@@ -14,13 +14,11 @@ import numpy as np
 
 from ..constraints import Predicate
 from ..errors import ParameterError
-from .base import Optimizer, register
+from .base import Optimizer, is_regressor, register
 
 #: coefficients below this are taken as zero (the terms a regressor dropped)
 ZERO = 1e-14
-REGRESSOR = Predicate(lambda v: callable(getattr(v, "fit", None)) and hasattr(v, "get_params")
-                      and not isinstance(v, Optimizer),
-                      "a scikit-learn regressor (with fit and coef_)")
+REGRESSOR = Predicate(is_regressor, "a scikit-learn regressor (with fit and coef_)")
 
 
 @register("wrapped")
