@@ -15,6 +15,7 @@ from sklearn.metrics import mean_squared_error, r2_score
 
 import discrepancy as dc
 from discrepancy.errors import NameConventionWarning, ParameterError, ShortRecordWarning
+from pysindy_helpers import pysindy_defaults, quiet
 
 warnings.filterwarnings("ignore", category=UserWarning, module="pysindy")
 TOL = dict(rtol=1e-8, atol=1e-8)
@@ -41,17 +42,7 @@ def lorenz():
     return lorenz_run(t), t
 
 
-def fd_model(**kw):
-    """PySINDy's defaults: finite differences and STLSQ(threshold=0.1)."""
-    kw.setdefault("optimizer", dc.STLSQ(threshold=0.1))
-    kw.setdefault("differentiation_method", dc.FiniteDifference())
-    return dc.DiscrepancyModel(**kw)
-
-
-def quiet(f, *args, **kwargs):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return f(*args, **kwargs)
+fd_model = pysindy_defaults
 
 
 # ---------------------------------------------------------------- 1. short records

@@ -21,6 +21,7 @@ from sklearn.model_selection import RandomizedSearchCV, TimeSeriesSplit
 
 import discrepancy as dc
 from discrepancy import errors
+from pysindy_helpers import pysindy_defaults, quiet
 
 warnings.filterwarnings("ignore", module="pysindy")
 TOL = dict(rtol=1e-8, atol=1e-8)
@@ -38,17 +39,7 @@ def documented(phrase: str) -> None:
         f"README does not document {phrase!r}"
 
 
-def ours(**kw):
-    """Our model with PySINDy's defaults (finite differences, STLSQ 0.1)."""
-    kw.setdefault("optimizer", dc.STLSQ(threshold=0.1))
-    kw.setdefault("differentiation_method", dc.FiniteDifference())
-    return dc.DiscrepancyModel(**kw)
-
-
-def quiet(f, *a, **k):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return f(*a, **k)
+ours = pysindy_defaults
 
 
 # PySINDy's test fixtures (its conftest, 2.x)
@@ -541,3 +532,92 @@ def test_documented_default_model_on_a_ten_sample_record():
         mine = dc.DiscrepancyModel().fit(X1, T1)
     same_coefficients(ps.SINDy().fit(X1, T1), mine)
     documented("**Short records fall back**")
+
+
+def test_the_readme_maps_every_public_pysindy_name():
+    """Every name in ``pysindy.__all__`` and its submodules' public names has a row (or a
+    mention) in the README's "Coming from PySINDy" section."""
+    import importlib
+    import inspect
+
+    names = set()
+    for module in ("pysindy", "pysindy.differentiation", "pysindy.feature_library",
+                   "pysindy.feature_library.base", "pysindy.optimizers", "pysindy.utils",
+                   "pysindy.deeptime"):
+        mod = importlib.import_module(module)
+        public = getattr(mod, "__all__", None) or [n for n in dir(mod) if not n.startswith("_")]
+        for name in public:
+            obj = getattr(mod, name, None)
+            home = obj.__name__ if inspect.ismodule(obj) else getattr(obj, "__module__", "")
+            if obj is None or (home or "").startswith("pysindy"):
+                names.add(name)
+    names |= {n for n in dir(ps) if not n.startswith("_") and
+              getattr(getattr(ps, n), "__module__", "").startswith("pysindy")}
+    missing = sorted(n for n in names if f"`{n}" not in SECTION and f".{n}" not in SECTION
+                     and f" {n}`" not in SECTION)
+    assert not missing, f"README's PySINDy section does not mention {missing}"
+    assert len(names) >= 60
+
+
+# ------------------------------------------------------------------ test_optimizers.py
+def _quadratic(rng):
+    x = rng.standard_normal((100, 3))
+    return x, ps.PolynomialLibrary(degree=2, include_bias=False).fit_transform(x)
+
+
+@pytest.mark.parametrize("params", [
+    dict(regularizer="l1", reg_weight_lam=1e-5), dict(regularizer="l2", reg_weight_lam=1e-5),
+    dict(regularizer="weighted_l1", reg_weight_lam=1e-5 * np.ones((3, 9))),
+    dict(regularizer="weighted_l2", reg_weight_lam=np.zeros((3, 9)))],
+    ids=["l1", "l2", "weighted_l1", "weighted_l2"])
+def test_same_constrained_sr3_with_identity_constraints(rng, params):
+    """PySINDy's quadratic-library case: the first p coefficients constrained to zero (the
+    kind of constraint unsaid: equalities, with a warning, in both)."""
+    x, theta = _quadratic(rng)
+    y = theta @ rng.normal(size=(9, 3))
+    kw = dict(constraint_lhs=np.eye(6, 27), constraint_rhs=np.zeros(6), **params)
+    with pytest.warns(UserWarning, match="equalit"):
+        mine = dc.ConstrainedSR3(**kw).fit(theta, y)
+    assert np.allclose(mine.coef_.ravel()[:6], 0.0)
+    pytest.importorskip("cvxpy")
+    peer = quiet(ps.ConstrainedSR3(**kw).fit, theta, y)
+    np.testing.assert_allclose(mine.coef_, peer.coef_, **TOL)
+
+
+@pytest.mark.parametrize("make", [lambda: (ps.STLSQ(), dc.STLSQ(threshold=0.1)),
+                                  lambda: (ps.SR3(), dc.SR3()),
+                                  lambda: (ps.ConstrainedSR3(), dc.ConstrainedSR3())],
+                         ids=["stlsq", "sr3", "constrainedsr3"])
+def test_same_sample_weights_of_zero_drop_samples(make):
+    """PySINDy's sample-weight case: every other weight 0 is the other samples alone."""
+    peer, mine = make()
+    w = np.ones(len(X1))
+    w[::2] = 0
+    np.testing.assert_allclose(mine.fit(X1, X1, sample_weight=w).coef_,
+                               quiet(peer.fit, X1, X1, sample_weight=w).coef_, **TOL)
+    np.testing.assert_allclose(make()[1].fit(X1[1::2], X1[1::2]).coef_, mine.coef_,
+                               rtol=1e-10, atol=1e-12)
+
+
+def test_same_optimizer_predict_and_complexity():
+    x = np.c_[2 * np.linspace(1, 100, 100), -10 * np.linspace(1, 100, 100)]
+    x_dot = np.ones((100, 2)) * [2, -10]
+    for opt in (dc.STLSQ(threshold=0.1), dc.SR3()):
+        with pytest.raises(AttributeError):            # not fitted, as PySINDy's
+            _ = opt.complexity
+        opt.fit(x, x)
+        assert opt.complexity > 0 and opt.predict(x).shape == x.shape
+    peer = ps.STLSQ().fit(x, x_dot)
+    np.testing.assert_allclose(dc.STLSQ(threshold=0.1).fit(x, x_dot).predict(x),
+                               peer.predict(x), **TOL)
+
+
+def test_documented_parameters_are_checked_when_used():
+    """PySINDy refuses STLSQ(threshold=-1) in its constructor; here (scikit-learn's
+    contract) the constructor stores it and fit refuses it, naming it."""
+    with pytest.raises(ValueError):
+        ps.STLSQ(threshold=-1)
+    bad = dc.STLSQ(threshold=-1)
+    with pytest.raises(errors.ParameterError, match="threshold"):
+        bad.fit(X1, X1)
+    documented("checked when they are used")

@@ -147,6 +147,19 @@ class Optimizer(Estimator, ABC):
         self.ind_ = np.abs(self.coef_) > 0
         return self
 
+    def predict(self, theta) -> np.ndarray:
+        """``Θ ξ``: the fitted targets ``(m, n_targets)`` of rows ``theta`` ``(m, p)``."""
+        from ..data.trajectory import as_2d
+
+        self.check_is_fitted()
+        return as_2d("theta", theta, n_cols=self.coef_.shape[1]) @ self.coef_.T
+
+    @property
+    def complexity(self) -> int:
+        """Number of nonzero coefficients (PySINDy's ``complexity``)."""
+        self.check_is_fitted()
+        return int(np.count_nonzero(self.coef_))
+
     @abstractmethod
     def _solve(self, stats: GramStatistics, scale: np.ndarray) -> np.ndarray:
         """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics
