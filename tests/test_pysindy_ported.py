@@ -492,6 +492,21 @@ def test_documented_duplicate_columns_are_kept_once():
     documented("duplicate columns")
 
 
+def test_same_libraries_fitted_to_data_and_model_attributes():
+    x = np.array([[0.0, -1], [1.0, 0.0], [2.0, -1.0]])
+    for peer_lib, our_lib in ((ps.PolynomialLibrary(degree=3), dc.PolynomialLibrary(3)),
+                              (ps.FourierLibrary(n_frequencies=2), dc.FourierLibrary(2))):
+        np.testing.assert_allclose(our_lib.fit(x).transform(x), peer_lib.fit(x).transform(x),
+                                   **TOL)
+        np.testing.assert_allclose(our_lib.fit_transform(x), peer_lib.fit_transform(x), **TOL)
+    t = np.arange(0, 2, 0.002)
+    x = odeint(lambda z, tau: lorenz(tau, z), [-8, 8, 27], t)
+    peer, mine = ps.SINDy().fit(x, t, u=np.sin(t)), ours().fit(x, t, u=np.sin(t))
+    for name in ("n_features_in_", "n_control_features_", "n_output_features_"):
+        assert getattr(mine, name) == getattr(peer, name)
+    assert len(mine.feature_names) == len(peer.feature_names) == 4
+
+
 def test_documented_library_feature_names():
     peer = ps.FourierLibrary(n_frequencies=2).fit(np.zeros((3, 1))).get_feature_names()
     mine = dc.FourierLibrary(2).fit(["x1"]).get_feature_names()

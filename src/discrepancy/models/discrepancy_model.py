@@ -264,6 +264,29 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         return self.prior_(x, u) + checked_discrepancy(self, x if u is None else np.hstack([x, u]))
 
     @property
+    def feature_names(self) -> list[str]:
+        """PySINDy's ``feature_names``: the names of the states, then the inputs."""
+        return self.variable_names_
+
+    @property
+    def n_features_in_(self) -> int:
+        """PySINDy's (and scikit-learn's) number of input variables: states plus inputs."""
+        self.check_is_fitted()
+        return self.n_states_ + self.n_inputs_
+
+    @property
+    def n_control_features_(self) -> int:
+        """PySINDy's number of inputs (``n_inputs_``)."""
+        self.check_is_fitted()
+        return self.n_inputs_
+
+    @property
+    def n_output_features_(self) -> int:
+        """PySINDy's number of library terms."""
+        self.check_is_fitted()
+        return self.coef_.shape[1]
+
+    @property
     def complexity(self) -> int:
         """Number of nonzero coefficients (PySINDy's ``complexity``)."""
         self.check_is_fitted()
