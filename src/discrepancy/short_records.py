@@ -17,14 +17,27 @@ import warnings
 from .errors import ShortRecordWarning
 
 
-def too_short(choice: str, have: int, need: int, *, unit: str = "samples", fallback: str,
-              stacklevel: int = 3) -> bool:
+def too_short(choice: str, have: int, need: int, *, unit: str = "samples",
+              fallback: str) -> bool:
     """Whether ``have`` is below the ``need`` of the automatic ``choice``; if so, warns that
-    ``fallback`` is used instead. Any automatic choice (a selection rule, a smoother) calls
-    it with its own requirement, so short records degrade the same way everywhere."""
+    ``fallback`` is used instead (the warning points at the caller's line outside this
+    package). Any automatic choice (a selection rule, a smoother) calls it with its own
+    requirement, so short records degrade the same way everywhere."""
     if have >= need:
         return False
     warnings.warn(f"{choice} needs at least {need} {unit}; these data have {have}, so "
                   f"{fallback} is used instead (give longer records, or choose it yourself "
-                  "to silence this warning)", ShortRecordWarning, stacklevel=stacklevel + 1)
+                  "to silence this warning)", ShortRecordWarning, stacklevel=_user_level())
     return True
+
+
+def _user_level() -> int:
+    """The ``stacklevel`` of the first frame outside this package (the user's call)."""
+    import sys
+    from pathlib import Path
+
+    package = str(Path(__file__).resolve().parent)
+    frame, level = sys._getframe(1), 1
+    while frame is not None and str(Path(frame.f_code.co_filename).resolve()).startswith(package):
+        frame, level = frame.f_back, level + 1
+    return level

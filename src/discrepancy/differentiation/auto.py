@@ -150,7 +150,7 @@ class AutoSmoothing(Differentiator):
         need = 4 * (self.polyorder + 3)  # a quarter of the record holds the longest window
         too_short(f"AutoSmoothing (a window of degree {self.polyorder} chosen by GCV)",
                   shortest, need, unit="samples in the shortest trajectory",
-                  fallback="FiniteDifference() (second order, no smoothing)", stacklevel=5)
+                  fallback="FiniteDifference() (second order, no smoothing)")
         return FiniteDifference(), {"chosen_by": f"the short-record fallback ({shortest} "
                                                  "samples, too few for GCV)"}
 

@@ -99,7 +99,7 @@ def cross_validates(stats) -> bool:
 
     return not too_short(f"threshold='auto' (cross-validation over blocks of {stats.segment} "
                          "samples)", stats.count, stats.segment + 1,
-                         fallback="the Bayesian information criterion", stacklevel=6) \
+                         fallback="the Bayesian information criterion") \
         and len(stats.usable_folds()) >= 2
 
 
