@@ -16,9 +16,10 @@ from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..optimizers.wrapped import REGRESSOR
 from ..symbolic import compile_numpy, feature_name
-from .arguments import keywords_only, metadata_routing, require_t
+from .arguments import keywords_only, require_t
 from .checks import checked_discrepancy, pairs
 from .output_methods import OutputErrorMethods
+from .pysindy_interface import PySINDyInterface
 from .setup import FitSetup, resolve_setup
 from .simulation import integrate
 from .term_constraints import Constraints
@@ -29,7 +30,7 @@ _NAMES = [None, InstanceOf(str, "a name"),
                     "a list of names")]
 
 
-class DiscrepancyModel(OutputErrorMethods, Estimator):
+class DiscrepancyModel(OutputErrorMethods, PySINDyInterface, Estimator):
     """Hybrid model ``dx/dt = f_m(x, u) + g(x, u)`` with a sparse discrepancy ``g = Θ(x, u) Ξ``.
 
     Args:
@@ -264,29 +265,6 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         return self.prior_(x, u) + checked_discrepancy(self, x if u is None else np.hstack([x, u]))
 
     @property
-    def feature_names(self) -> list[str]:
-        """PySINDy's ``feature_names``: the names of the states, then the inputs."""
-        return self.variable_names_
-
-    @property
-    def n_features_in_(self) -> int:
-        """PySINDy's (and scikit-learn's) number of input variables: states plus inputs."""
-        self.check_is_fitted()
-        return self.n_states_ + self.n_inputs_
-
-    @property
-    def n_control_features_(self) -> int:
-        """PySINDy's number of inputs (``n_inputs_``)."""
-        self.check_is_fitted()
-        return self.n_inputs_
-
-    @property
-    def n_output_features_(self) -> int:
-        """PySINDy's number of library terms."""
-        self.check_is_fitted()
-        return self.coef_.shape[1]
-
-    @property
     def complexity(self) -> int:
         """Number of nonzero coefficients (PySINDy's ``complexity``)."""
         self.check_is_fitted()
@@ -319,26 +297,15 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         self._sync()
         x0 = check_vector("x0", x0, self.n_states_)
         validate_params("simulate", {"compiled": compiled}, {"compiled": [bool]})
+        from .simulate_arguments import map_options, simulation_options
+
+        pysindy = dict(integrator=integrator, integrator_kws=integrator_kws,
+                       interpolator=interpolator, interpolator_kws=interpolator_kws)
         if self.discrete_time:
             from .discrete import iterate
-            given = {k for k, v in dict(integrator=integrator, integrator_kws=integrator_kws,
-                                        interpolator=interpolator,
-                                        interpolator_kws=interpolator_kws).items()
-                     if v is not None} | set(options)
-            if given:
-                raise ParameterError(f"simulate of a discrete-time model takes x0, t (steps), "
-                                     f"u and stop_condition; got {sorted(given)}")
             return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_,
-                           stop_condition=stop_condition)
-        if stop_condition is not None:
-            raise ParameterError("stop_condition is for discrete-time models (as in PySINDy); "
-                                 "a continuous simulation runs over all of t")
-        from .simulate_arguments import integrator_options, interpolated_input
-        from .simulation import check_options
-
-        integrator_kws = integrator_options(integrator, integrator_kws, options)
-        u = interpolated_input(u, t, interpolator, interpolator_kws)
-        check_options(integrator_kws)  # before any work that depends on them
+                           stop_condition=map_options(stop_condition, pysindy, options))
+        u, integrator_kws = simulation_options(u, t, stop_condition, pysindy, options)
         if "method" not in integrator_kws and self._has_jumps():
             integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
         if integrator_kws.get("method") == "rk4" and compiled and not callable(u):
@@ -433,13 +400,6 @@ class DiscrepancyModel(OutputErrorMethods, Estimator):
         require_t("score", t, needed=not self.discrete_time and
                   (x_dot is None or metric == "trajectory"))
         return score(self, x, t, u, x_dot, metric=metric, metric_kws=metric_kws)
-
-    def get_metadata_routing(self):
-        """scikit-learn's metadata routing: with
-        ``sklearn.set_config(enable_metadata_routing=True)``, ``GridSearchCV(model,
-        grid).fit(x, t=dt)`` gives every fold's ``fit`` and ``score`` its ``t`` (and ``u``,
-        ``x_dot``; ``sample_weight`` to ``fit``), split like ``x``."""
-        return metadata_routing(type(self).__name__)
 
     def bootstrap(self, x, t=None, *args, u=None, x_dot=None, n_resamples: int = 200,
                   block_length: int | None = None, method: str = "wild", seed: int = 0,

@@ -68,3 +68,27 @@ def interpolated_input(u, t, interpolator, interpolator_kws):
         raise ParameterError(f"interpolator(t, u) must return a callable u(t); got "
                              f"{describe(law)}")
     return law
+
+
+def map_options(stop_condition, pysindy: dict, options: dict):
+    """A discrete-time model's only option, ``stop_condition``; anything else is refused
+    (a map has no integrator, and an ignored keyword would be a silent typo)."""
+    given = {k for k, v in pysindy.items() if v is not None} | set(options)
+    if given:
+        raise ParameterError(f"simulate of a discrete-time model takes x0, t (steps), u and "
+                             f"stop_condition; got {sorted(given)}")
+    return stop_condition
+
+
+def simulation_options(u, t, stop_condition, pysindy: dict, options: dict):
+    """``(u, options)`` for :func:`integrate` from PySINDy's keywords and ours, checked
+    before any work that depends on them."""
+    from .simulation import check_options
+
+    if stop_condition is not None:
+        raise ParameterError("stop_condition is for discrete-time models (as in PySINDy); a "
+                             "continuous simulation runs over all of t")
+    kws = integrator_options(pysindy["integrator"], pysindy["integrator_kws"], options)
+    u = interpolated_input(u, t, pysindy["interpolator"], pysindy["interpolator_kws"])
+    check_options(kws)
+    return u, kws
