@@ -203,6 +203,23 @@ def test_ensembles_equal_pysindys_from_the_same_draws(lorenz, kw):
     np.testing.assert_array_equal(seeded.coefficients(), ours.coefficients())
 
 
+def test_an_ensemble_gives_the_bootstraps_table_and_intervals(lorenz):
+    from discrepancy.models.uncertainty import CoefficientUncertainty
+
+    x, t = lorenz
+    x = x + 0.05 * np.random.default_rng(3).normal(size=x.shape)
+    model = fd_model(optimizer=dc.EnsembleOptimizer(dc.STLSQ(threshold=0.1), bagging=True,
+                                                    n_models=12, random_state=0)).fit(x, t)
+    spread = CoefficientUncertainty.from_ensemble(model)
+    np.testing.assert_array_equal(spread.inclusion_probability,
+                                  model.optimizer_.inclusion_probability_)
+    low, high = spread.interval()
+    assert np.all(low <= model.coefficients()) and np.all(model.coefficients() <= high)
+    assert "±" in model.equations(uncertainty=spread)[0]
+    with pytest.raises(ParameterError, match="needs a model fitted with an EnsembleOptimizer"):
+        CoefficientUncertainty.from_ensemble(fd_model().fit(x, t))
+
+
 def test_library_ensembles_stream(lorenz):
     """Dropping terms needs only the Gram statistics: a chunked fit equals the in-memory
     one; bagging samples needs the samples and says so."""

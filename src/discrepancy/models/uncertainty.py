@@ -85,6 +85,20 @@ class CoefficientUncertainty:
     def __str__(self) -> str:
         return self.table()
 
+    @classmethod
+    def from_ensemble(cls, model) -> CoefficientUncertainty:
+        """The ensemble's models as samples: a model fitted with an
+        :class:`~discrepancy.optimizers.EnsembleOptimizer` gets the bootstrap's table,
+        intervals and ``model.print(uncertainty=...)`` (``block_length`` 1: samples were
+        drawn one by one)."""
+        model.check_is_fitted()
+        samples = getattr(model.optimizer_, "coef_list_", None)
+        if samples is None:
+            raise ParameterError(f"from_ensemble needs a model fitted with an "
+                                 f"EnsembleOptimizer; this one's is {model.optimizer_!r}")
+        return cls(model.coef_.copy(), np.asarray(samples), list(model.state_names_),
+                   model.get_feature_names(), 1)
+
 
 def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int | None = None,
                      sample_weight=None):
