@@ -1,31 +1,31 @@
-"""The adversarial suite tries 773 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 840 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
 | cli | 45 |
 | library | 54 |
-| optimizer | 43 |
-| differentiation | 36 |
+| optimizer | 77 |
+| differentiation | 43 |
 | energy | 44 |
 | control | 61 |
 | estimation | 49 |
 | model file | 50 |
 | io.load | 40 |
-| stream | 36 |
+| stream | 37 |
 | dask | 11 |
-| fit | 72 |
+| fit | 79 |
 | prior | 21 |
-| model | 47 |
+| model | 49 |
 | isolated | 48 |
 | predict | 15 |
-| score | 17 |
+| score | 21 |
 | export | 21 |
-| simulate | 43 |
-| bootstrap | 20 |
-| total | 773 |
+| simulate | 54 |
+| bootstrap | 21 |
+| total | 840 |
 
-651 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 122 must give the right answer, checked against an
+699 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 141 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 48 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
@@ -45,6 +45,7 @@ import test_adversarial_files
 import test_adversarial_fit
 import test_adversarial_isolated
 import test_adversarial_models
+import test_adversarial_options
 
 TABLES = [test_adversarial_fit, test_adversarial_components, test_adversarial_models,
           test_adversarial_files, test_adversarial_cli, test_adversarial_energy_control,

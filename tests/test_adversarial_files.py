@@ -161,7 +161,7 @@ CASES = [
     Case("model file", "user function names not identifiers", lambda: load_doc(setter("user_functions", ["a b"])), raises(ModelFileError, r"user_functions must be a list of identifiers")),
     Case("model file", "optimizer with code", lambda: load_doc(setter("optimizer", {"name": "stlsq", "params": {"threshold": "__import__('os')"}})), raises(ModelFileError, r"optimizer: .*threshold")),
     Case("model file", "unknown optimizer", lambda: load_doc(setter("optimizer", {"name": "bogus", "params": {}})), raises(ModelFileError, r"optimizer: .*'bogus'")),
-    Case("model file", "differentiation with an unknown option", lambda: load_doc(setter("differentiation_method", {"name": "finite_difference", "params": {"order": 9}})), raises(ModelFileError, r"differentiation_method: .*no parameter 'order'")),
+    Case("model file", "differentiation with an unknown option", lambda: load_doc(setter("differentiation_method", {"name": "finite_difference", "params": {"axis": 9}})), raises(ModelFileError, r"differentiation_method: .*no parameter 'axis'")),
     Case("model file", "fit record of text", lambda: load_doc(setter("fit", "yes")), raises(ModelFileError, r"fit must be")),
     Case("model file", "fit record nested 10 deep", lambda: load_doc(setter("fit", "differentiation_choice", json.loads("{\"a\": " * 10 + "1" + "}" * 10))), raises(ModelFileError, r"differentiation_choice must be an object")),
     Case("model file", "over 20 MiB", lambda: load_doc(raw=" " * (21 * 2**20)), raises(ModelFileError, r"more than the 20971520")),

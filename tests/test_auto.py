@@ -82,9 +82,17 @@ def test_non_uniform_times_get_a_smoothing_spline(rng):
     assert isinstance(method, dc.SmoothingSpline) and "non-uniform" in info["chosen_by"]
 
 
-def test_trajectories_too_short_to_choose_a_window_are_refused():
-    with pytest.raises(ShapeError, match="shortest trajectory has 30 samples"):
-        dc.AutoSmoothing().choose([(np.arange(30.0), np.zeros((30, 1)))])
+def test_trajectories_too_short_to_choose_a_window_fall_back_to_finite_differences():
+    """Below 40 samples (four degree-7 windows) GCV cannot choose: PySINDy's default is used,
+    with a warning that says so, and the model prints which method it used."""
+    t = np.linspace(0, 1, 30)
+    x = np.c_[np.sin(3 * t), t ** 2]
+    with pytest.warns(dc.errors.ShortRecordWarning, match="needs at least 40 .* have 30"):
+        method, info = dc.AutoSmoothing().choose([(t, x)])
+    assert isinstance(method, dc.FiniteDifference) and "fallback" in info["chosen_by"]
+    np.testing.assert_allclose(method(x, t), np.gradient(x, t, axis=0, edge_order=2))
+    with pytest.raises(ShapeError, match="max_window=5 leaves no window"):
+        dc.AutoSmoothing(max_window=5).choose([(t, x)])
 
 
 # -------------------------------------------------------------- the defaults

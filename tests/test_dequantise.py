@@ -35,8 +35,8 @@ def test_reconstruction_beats_smoothing_alone_on_quantised_positions_and_speeds(
     q = _encoder(y)
     sg = dc.SavitzkyGolay(71, 6)
     deq = dc.Dequantised(sg, resolution=STEP)
-    y_sg, dy_sg = sg(q, t)
-    y_dq, dy_dq = deq(q, t)
+    y_sg, dy_sg = sg.smooth_and_differentiate(q, t)
+    y_dq, dy_dq = deq.smooth_and_differentiate(q, t)
     edge = deq.edge
     assert _rms(y_dq, y, edge) < 0.7 * _rms(y_sg, y, edge)
     assert _rms(dy_dq, dy, edge) < 0.7 * _rms(dy_sg, dy, edge)
@@ -50,8 +50,8 @@ def test_relative_encoder_matrix():
     q = np.column_stack([_encoder(phi1), _encoder(phi1) + rel])
     exact = np.column_stack([phi1, phi2])
     deq = dc.Dequantised(resolution=STEP, encoders=[[1, 0], [-1, 1]])
-    q_dq, _ = deq(q, t)
-    q_sg, _ = dc.SavitzkyGolay(71, 6)(q, t)
+    q_dq, _ = deq.smooth_and_differentiate(q, t)
+    q_sg, _ = dc.SavitzkyGolay(71, 6).smooth_and_differentiate(q, t)
     assert _rms(q_dq, exact, deq.edge) < 0.7 * _rms(q_sg, exact, deq.edge)
     # the identity matrix does not fit these readings: phi2 is not on the grid by itself
     with pytest.raises(DataError, match="encoder 1 is not quantised"):

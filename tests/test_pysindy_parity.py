@@ -148,21 +148,47 @@ def test_spectral_derivative_equals_pysindys_and_the_truth():
     t = np.arange(256) * 2 * np.pi / 256
     x = np.c_[np.sin(3 * t), np.cos(5 * t) + 0.3 * np.sin(t)]
     exact = np.c_[3 * np.cos(3 * t), -5 * np.sin(5 * t) + 0.3 * np.cos(t)]
-    ours = dc.Spectral()(x, t)[1]
+    ours = dc.Spectral()(x, t)
     np.testing.assert_allclose(ours, exact, atol=1e-10)
     np.testing.assert_allclose(ours, ps.SpectralDerivative()._differentiate(x, t), atol=1e-10)
 
 
-def test_grid_search_and_clone_work(lorenz_data):
-    x = lorenz_data.x
+@pytest.mark.parametrize("times", ["step", "array"])
+def test_grid_search_carries_t_to_every_fold_with_metadata_routing(lorenz_data, times):
+    """With routing, every fold is fitted and scored with the real step (a times array is
+    split like x): the search's scores equal a hand-written loop over the same splits."""
+    import sklearn
+
+    x, dt = lorenz_data.x, lorenz_data.dt
+    t = dt if times == "step" else lorenz_data.t
     model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(2),
                                 optimizer=dc.STLSQ(threshold=0.1),
                                 differentiation_method=dc.FiniteDifference())
-    search = GridSearchCV(model, {"optimizer__threshold": [0.1, 5.0, 50.0]},
-                          cv=TimeSeriesSplit(n_splits=3))
-    search.fit(x)
-    assert search.best_params_["optimizer__threshold"] == 0.1  # 50 removes Lorenz's terms
+    grid, splits = [0.1, 5.0, 50.0], TimeSeriesSplit(n_splits=3)
+    with sklearn.config_context(enable_metadata_routing=True), warnings.catch_warnings():
+        warnings.simplefilter("ignore")      # threshold 50 removes every term (warned)
+        search = GridSearchCV(model, {"optimizer__threshold": grid}, cv=splits).fit(x, t=t)
+        by_hand = [np.mean([clone(model).set_params(optimizer__threshold=g).fit(
+            x[a], t=t if times == "step" else t[a]).score(x[b], t=t if times == "step" else t[b])
+            for a, b in splits.split(x)]) for g in grid]
+    np.testing.assert_allclose(search.cv_results_["mean_test_score"], by_hand, rtol=1e-12)
+    assert search.best_params_["optimizer__threshold"] == 0.1 and search.best_score_ > 0.999
     assert clone(model).get_params()["optimizer__threshold"] == 0.1
+
+
+def test_without_routing_a_fold_scored_without_t_fails_loudly(lorenz_data):
+    """scikit-learn without routing gives score no t: that is an error (reported as failed
+    scores), never a score with a step of 1; PySINDy 2.1's search fails too."""
+    model = dc.DiscrepancyModel(optimizer=dc.STLSQ(threshold=0.1),
+                                differentiation_method=dc.FiniteDifference())
+    search = GridSearchCV(model, {"optimizer__threshold": [0.1, 1.0]},
+                          cv=TimeSeriesSplit(n_splits=2), error_score="raise")
+    with pytest.raises(dc.errors.ParameterError, match="score: t is required.*routing"):
+        search.fit(lorenz_data.x, t=lorenz_data.dt)
+    with pytest.raises(dc.errors.ParameterError, match="fit: t is required"):
+        model.fit(lorenz_data.x)
+    with pytest.raises(TypeError):           # PySINDy: t is a required argument
+        ps.SINDy().fit(lorenz_data.x)
 
 
 def test_include_interaction_false_and_complexity(lorenz_data):

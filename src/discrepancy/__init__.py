@@ -28,7 +28,15 @@ from .differentiation import (
 from .energy import DissipationDiscrepancy, EnergyDiscrepancy
 from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
 from .models import Constraints, DiscrepancyModel, load_model
-from .optimizers import SR3, STLSQ, GramStatistics, Lasso
+from .optimizers import (
+    SR3,
+    STLSQ,
+    ConstrainedSR3,
+    EnsembleOptimizer,
+    GramStatistics,
+    Lasso,
+    LinearConstraints,
+)
 
 __all__ = [
     "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "CustomLibrary", "Dequantised",
@@ -37,4 +45,5 @@ __all__ = [
     "PolynomialLibrary", "SR3", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline",
     "TrendFiltered",
     "WeakForm", "ZarrSource", "errors", "estimation", "io", "load_model", "metrics", "systems",
+    "ConstrainedSR3", "EnsembleOptimizer", "LinearConstraints",
 ]

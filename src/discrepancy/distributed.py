@@ -104,6 +104,9 @@ def _trajectory_graph(setup, x, u, xd, step, trajectory, offset):
                   meta=np.empty((0, 0)), dtype=float, chunks=out_chunks)
     if xd is None:
         halo = setup.differentiation.halo
+        if setup.differentiation.dropped_rows != (0, 0):
+            raise ParameterError(f"{setup.differentiation!r} drops each trajectory's end rows; "
+                                 "Dask fits need drop_endpoints=False (or x_dot)")
         if halo is None:
             raise ParameterError(f"{setup.differentiation!r} is a global method; Dask "
                                  "fits need a local one (FiniteDifference, SavitzkyGolay) or x_dot")

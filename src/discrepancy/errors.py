@@ -88,6 +88,16 @@ class ConvergenceWarning(UserWarning):
     """An iterative solver stopped at its iteration limit; its last iterate is used."""
 
 
+class ShortRecordWarning(UserWarning):
+    """A record is too short for an automatic choice (a smoothing window, a cross-validated
+    threshold); the message says what was used instead (:mod:`discrepancy.short_records`)."""
+
+
+class NameConventionWarning(UserWarning):
+    """A name refers to a default variable name that means another variable in PySINDy's
+    0-based names (``x1`` is the first state here, the second in PySINDy)."""
+
+
 class CoarseSamplingWarning(UserWarning):
     """The data have too few samples per period for the chosen differentiation method."""
 

@@ -82,6 +82,10 @@ def _stitched(chunks, method):
             yield chunk, 0, chunk.n_rows
             continue
         h = method.halo
+        if method.dropped_rows != (0, 0):
+            raise ParameterError(f"{method!r} drops each trajectory's end rows, which a "
+                                 "stream only knows at its end; stream with "
+                                 "drop_endpoints=False (or fit in memory)")
         if h is None:
             raise ParameterError(
                 f"{method!r} is a global differentiation method (the derivative at one row "

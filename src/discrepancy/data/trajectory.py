@@ -72,13 +72,17 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
             never differentiated across their joins). All must have the same ``n``.
         t: time step (float > 0) or times ``(m,)``, or a list of those per trajectory.
             ``None`` means a unit step.
-        u: inputs ``(m, r)`` (or ``(m,)`` for one input), or a list per trajectory.
+        u: inputs ``(m, r)`` (or ``(m,)`` for one input), a list per trajectory, or one
+            number (a constant input in every trajectory, as PySINDy broadcasts it).
         x_dot: measured derivatives ``(m, n)``, or a list per trajectory.
         sample_weight: weights of the samples in the regression: ``(m,)``, or a list per
             trajectory of arrays or numbers (a number weighs a whole trajectory).
         x_name: the argument's name in error messages (``"y"`` for measured outputs).
     """
     several = isinstance(x, (list, tuple))
+    if is_number(u):
+        u = [np.full(np.shape(xi)[:1], float(u)) for xi in (x if several else [x])]
+        u = u if several else u[0]
     xs = list(x) if several else [x]
     if not xs:
         raise ShapeError(f"{x_name} must hold at least one trajectory; got an empty list")
@@ -120,6 +124,13 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
         raise DataError("sample_weight must have at least one positive weight; all are 0, "
                         "which leaves nothing to fit")
     return out
+
+
+def is_number(value) -> bool:
+    """One real number (not a bool, not an array)."""
+    import numbers
+
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
 def check_weight(name: str, weight, m: int, *, where: str | None = None,

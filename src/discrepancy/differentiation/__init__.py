@@ -2,7 +2,8 @@
 from .auto import AutoSmoothing
 from .base import Differentiator, available_methods, get_differentiation_method
 from .dequantise import Dequantised
-from .methods import FiniteDifference, Kalman, SavitzkyGolay, Spline, TrendFiltered
+from .finite_difference import FiniteDifference
+from .methods import Kalman, SavitzkyGolay, Spline, TrendFiltered
 from .spectral import Spectral
 from .spline import SmoothingSpline
 from .weak import WeakForm

@@ -33,6 +33,7 @@ from ..constraints import Integral, Interval, Predicate
 from ..data.validation import is_uniform
 from ..errors import ShapeError
 from .base import Differentiator, register
+from .finite_difference import FiniteDifference
 from .methods import MAX_POLYORDER, ODD_WINDOW, SavitzkyGolay
 from .savgol import savgol, savgol_coefficients
 from .spline import SmoothingSpline
@@ -126,10 +127,7 @@ class AutoSmoothing(Differentiator):
         if self.max_window is not None:
             limit = min(limit, self.max_window)
         if limit < self.polyorder + 2:
-            raise ShapeError(f"AutoSmoothing: the shortest trajectory has {shortest} samples; "
-                             f"choosing a window of degree {self.polyorder} needs at least "
-                             f"{4 * (self.polyorder + 3)} (use fewer, longer trajectories, or "
-                             "a differentiation_method of your own)")
+            return self._too_short(shortest)
         windows, best, scores = [], [], []
         for j in range(n):
             w, s = gcv_window([x[:, j] for _, x in sample], self.polyorder, limit)
@@ -140,9 +138,25 @@ class AutoSmoothing(Differentiator):
         return method, {"chosen_by": "GCV", "noise_std": noise.tolist(),
                         "window_length": windows, "gcv_window": best, "gcv": scores}
 
+    def _too_short(self, shortest: int) -> tuple[Differentiator, dict]:
+        """PySINDy's default (second-order finite differences) for records too short to
+        choose a window from, with a warning (:mod:`discrepancy.short_records`)."""
+        from ..short_records import too_short
+
+        if self.max_window is not None and self.max_window < self.polyorder + 2:
+            raise ShapeError(f"AutoSmoothing: max_window={self.max_window} leaves no window of "
+                             f"degree {self.polyorder} to choose (it needs at least "
+                             f"{self.polyorder + 2})")
+        need = 4 * (self.polyorder + 3)  # a quarter of the record holds the longest window
+        too_short(f"AutoSmoothing (a window of degree {self.polyorder} chosen by GCV)",
+                  shortest, need, unit="samples in the shortest trajectory",
+                  fallback="FiniteDifference() (second order, no smoothing)")
+        return FiniteDifference(), {"chosen_by": f"the short-record fallback ({shortest} "
+                                                 "samples, too few for GCV)"}
+
     def _compute(self, x, t):
         method, _ = self.choose([(t, x)])
-        return method(x, t)
+        return method.smooth_and_differentiate(x, t)
 
 
 def _first_rows(series, budget: int) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -1,9 +1,11 @@
 """Base class and registry of differentiation methods.
 
-A method maps samples ``x`` ``(m, n)`` at times ``t`` ``(m,)`` to
-``(x_smooth, x_dot)``, both ``(m, n)``. ``x_smooth`` is what the library
-evaluates Θ on (the paper smooths x with Savitzky–Golay and uses the smoothed
-x); methods that do not smooth return ``x`` unchanged.
+A method called as ``method(x, t)`` returns the derivative ``x_dot`` (PySINDy's contract:
+the same shape as ``x``, ``t`` a step or the times) and keeps the smoothed samples in
+``smoothed_x_``. Fits use :meth:`Differentiator.smooth_and_differentiate`, which returns
+``(x_smooth, x_dot)``, both ``(m, n)``: ``x_smooth`` is what the library evaluates Θ on (the
+paper smooths x with Savitzky–Golay and uses the smoothed x); methods that do not smooth
+return ``x`` unchanged.
 """
 from __future__ import annotations
 
@@ -39,18 +41,37 @@ class Differentiator(Estimator, ABC):
         return None
 
     @property
+    def dropped_rows(self) -> tuple[int, int]:
+        """Samples at the start and at the end whose derivative the method leaves undefined
+        (NaN; fits drop those rows): ``(0, 0)`` unless it is asked to drop its endpoints."""
+        return (0, 0)
+
+    @property
     def edge(self) -> int:
         """Samples at each end whose estimate is an extrapolation (``halo``, or 0 for global
         methods that do not say otherwise)."""
         return self.halo or 0
 
-    def __call__(self, x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Return ``(x_smooth, x_dot)``, each ``(m, n)``, for ``x`` ``(m, n)`` at ``t`` ``(m,)``."""
+    def __call__(self, x, t=1.0) -> np.ndarray:
+        """The derivative of ``x`` ``(m, n)`` or ``(m,)`` at times ``t`` (a step, default 1
+        as in PySINDy, or ``(m,)`` times), shaped like ``x``; the smoothed samples are kept
+        in ``smoothed_x_`` (PySINDy's ``BaseDifferentiation`` contract)."""
+        one_dimensional = np.ndim(x) == 1
+        x_smooth, x_dot = self.smooth_and_differentiate(
+            np.reshape(x, (-1, 1)) if one_dimensional else x, t)
+        if one_dimensional:
+            x_smooth, x_dot = x_smooth[:, 0], x_dot[:, 0]
+        self.smoothed_x_ = x_smooth
+        return x_dot
+
+    def smooth_and_differentiate(self, x, t) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(x_smooth, x_dot)``, each ``(m, n)``, for ``x`` ``(m, n)`` at ``t`` (a step
+        or ``(m,)`` times)."""
         self._validate_params()
         x = check_array("x", x)
-        if np.ndim(t) != 1:
-            raise ShapeError(f"x must be (m, n) with t of shape (m,); got x {x.shape}, t "
-                             f"{np.shape(t)}")
+        if np.ndim(t) not in (0, 1):
+            raise ShapeError(f"t must be a step or an array of times (m,) for x of shape "
+                             f"(m, n); got x {x.shape}, t {np.shape(t)}")
         t = check_times("t", t, x.shape[0])
         if x.shape[0] < self.min_samples:
             raise ShapeError(f"x has {x.shape[0]} samples, fewer than the {self.min_samples} that "

@@ -113,5 +113,5 @@ class Dequantised(Differentiator):
         low, high = readings - step / 2, readings + step / 2
         y, smoother = readings, self._smoother
         for _ in range(self.iterations):
-            y = np.clip(smoother(y, t)[0], low, high)
-        return self._inner(np.linalg.solve(e, y.T).T, t)
+            y = np.clip(smoother.smooth_and_differentiate(y, t)[0], low, high)
+        return self._inner.smooth_and_differentiate(np.linalg.solve(e, y.T).T, t)

@@ -1,6 +1,6 @@
 """Concrete differentiation methods.
 
-Finite differences use ``numpy.gradient``, Savitzky–Golay uses
+Savitzky–Golay uses
 ``scipy.signal.savgol_filter``, and the global smoothers (spline, trend
 filtering, Kalman) come from the ``derivative`` package; nothing here
 re-implements them.
@@ -20,19 +20,6 @@ MAX_POLYORDER = 30
 #: an odd window of at least 3 samples (Savitzky-Golay smoothers)
 ODD_WINDOW = Predicate(lambda w: isinstance(w, (int, np.integer)) and not isinstance(w, bool)
                        and w >= 3 and w % 2 == 1, "an odd integer >= 3")
-
-
-@register("finite_difference")
-class FiniteDifference(Differentiator):
-    """Second-order centred differences (``numpy.gradient``), one-sided of second order at the
-    ends. Accepts non-uniform ``t``; error O(dt²). No smoothing."""
-
-    @property
-    def halo(self) -> int:
-        return 1
-
-    def _compute(self, x, t):
-        return x, np.gradient(x, t, axis=0, edge_order=2)
 
 
 @register("savitzky_golay")

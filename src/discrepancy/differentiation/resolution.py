@@ -53,7 +53,7 @@ def warn_if_coarse(method, t: np.ndarray, x: np.ndarray, names) -> None:
         omega = 2 * np.pi * f
         probe = np.sin(omega * (t - t[0]) + 0.3)[:, None]
         try:
-            _, rate = method(probe, t)
+            _, rate = method.smooth_and_differentiate(probe, t)
         except (DiscrepancyError, ValueError, NotImplementedError):
             return                       # no pointwise derivative (the weak form), or none here
         exact = omega * np.cos(omega * (t - t[0]) + 0.3)

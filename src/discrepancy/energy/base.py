@@ -53,7 +53,7 @@ class EnergyModel(Estimator):
         method = self.differentiation_method
         method = SavitzkyGolay(window_length=31, polyorder=3) if method is None \
             else get_differentiation_method(method)
-        q_smooth, dq = method(q, t)
+        q_smooth, dq = method.smooth_and_differentiate(q, t)
         h = method.edge
         keep = slice(h, q.shape[0] - h)
         return np.hstack([q_smooth, dq])[keep], t[keep]

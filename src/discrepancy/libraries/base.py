@@ -80,6 +80,11 @@ class FeatureLibrary(Estimator, ABC):
         """Numpy functions of the library's custom terms, by name (empty for exact terms)."""
         return {}
 
+    def fit_transform(self, Z: np.ndarray) -> np.ndarray:
+        """Θ of data ``Z`` ``(m, k)``, the library fitted to its ``k`` columns (default names
+        ``x1 ... xk``), as PySINDy's ``fit_transform``."""
+        return self.fit(as_float_array("Z", Z)).transform(Z)
+
     def get_feature_names(self) -> list[str]:
         """Names of the ``p`` columns of Θ in column order (e.g. ``"x1^2 x2"``); needs a fit."""
         if not hasattr(self, "feature_expressions_"):
@@ -97,7 +102,10 @@ class FeatureLibrary(Estimator, ABC):
 
 
 def check_names(names) -> list[str]:
-    """The variable names a library is fitted to: a list of distinct identifiers."""
+    """The variable names a library is fitted to: a list of distinct identifiers, or data
+    ``(m, k)`` as PySINDy's libraries are fitted (then the default names ``x1 ... xk``)."""
+    if isinstance(names, np.ndarray) and names.ndim == 2 and names.dtype.kind in "iuf":
+        return [f"x{i + 1}" for i in range(names.shape[1])]
     if isinstance(names, str) or not isinstance(names, (list, tuple)) or not all(
             isinstance(n, str) and IDENTIFIER.match(n) for n in names) or \
             len(set(names)) != len(names):

@@ -8,17 +8,19 @@ import numpy as np
 from ..base import Estimator
 from ..constraints import InstanceOf, Integral, Interval, Predicate, is_callable, validate_params
 from ..data.chunks import data_kind
-from ..data.trajectory import Trajectory, as_2d, as_trajectories
+from ..data.trajectory import Trajectory, as_2d, as_trajectories, is_number
 from ..data.validation import as_float_array, check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
+from ..optimizers.wrapped import REGRESSOR
 from ..symbolic import compile_numpy, feature_name
-from .arguments import keywords_only
+from .arguments import keywords_only, require_t
 from .checks import checked_discrepancy, pairs
 from .output_methods import OutputErrorMethods
 from .prediction_error_methods import PredictionErrorMethods
+from .pysindy_interface import PySINDyInterface
 from .setup import FitSetup, resolve_setup
 from .simulation import integrate
 from .term_constraints import Constraints
@@ -29,7 +31,7 @@ _NAMES = [None, InstanceOf(str, "a name"),
                     "a list of names")]
 
 
-class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
+class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterface, Estimator):
     """Hybrid model ``dx/dt = f_m(x, u) + g(x, u)`` with a sparse discrepancy ``g = Θ(x, u) Ξ``.
 
     Args:
@@ -64,7 +66,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         "prior": [None, is_callable, Predicate(lambda v: isinstance(v, (list, tuple)) and v,
                                                "a list of sympy expressions")],
         "feature_library": [None, InstanceOf(FeatureLibrary, "a feature library"), _SPEC],
-        "optimizer": [None, InstanceOf(Optimizer, "an Optimizer"), _SPEC],
+        "optimizer": [None, InstanceOf(Optimizer, "an Optimizer"), _SPEC, REGRESSOR],
         "differentiation_method": [None, InstanceOf(Differentiator, "a Differentiator"), _SPEC],
         "state_names": _NAMES, "input_names": _NAMES,
         "constraints": [None, InstanceOf(Constraints, "a discrepancy.Constraints")],
@@ -86,27 +88,34 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         self.discrete_time = discrete_time
 
     # ----------------------------------------------------------------- fitting
-    def fit(self, x, t=None, *args, u=None, x_dot=None, sample_weight=None) -> DiscrepancyModel:
+    def fit(self, x, t=None, *args, u=None, x_dot=None, sample_weight=None,
+            feature_names=None) -> DiscrepancyModel:
         """Learn the discrepancy from measured states.
 
         Args:
             x: states ``(m, n)``, a list of trajectories (never differentiated across
                 joins), a dask array, or chunks (see :mod:`discrepancy.streaming`).
-            t: time step or times ``(m,)`` (or a list per trajectory); default step 1.
-            u: inputs ``(m, r)`` or a list per trajectory (keyword only).
+            t: time step or times ``(m,)`` (or a list per trajectory); required unless
+                ``x_dot`` is given or the model is discrete-time (chunks may carry times).
+            u: inputs ``(m, r)``, a list per trajectory, or one number (a constant input).
             x_dot: measured derivatives ``(m, n)``; skips numerical differentiation.
             sample_weight: weight of each sample in the regression, ``(m,)``, or a list per
                 trajectory of arrays or numbers (a number weighs a whole trajectory). Chunked
                 data carry them in the chunks (``Chunk(x, weight=...)``).
+            feature_names: names of the states and then the inputs for this fit (PySINDy's
+                ``fit(feature_names=...)``; they replace ``state_names``/``input_names``).
 
         Returns:
             self
         """
-        keywords_only("fit", args, "u, x_dot and sample_weight")
+        keywords_only("fit", args, "u, x_dot, sample_weight and feature_names")
         kind = data_kind(x)
-        if kind != "arrays" and sample_weight is not None:
+        if kind != "arrays" and (sample_weight is not None or feature_names is not None):
             raise ParameterError("with chunked or dask x, give sample weights inside the chunks "
-                                 "(Chunk(x, weight=...)); dask arrays take none")
+                                 "(Chunk(x, weight=...); dask arrays take none) and names as "
+                                 "the model's state_names and input_names")
+        if kind != "chunks":  # chunks may carry their own times
+            require_t("fit", t, needed=x_dot is None and not self.discrete_time)
         if kind == "dask":
             from ..distributed import dask_statistics
             setup, stats = dask_statistics(self, x, t=t, u=u, x_dot=x_dot)
@@ -117,7 +126,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
             trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
             first = trajectories[0]
             setup = self.make_setup(first.x.shape[1], 0 if first.u is None else first.u.shape[1],
-                                    sample=trajectories)
+                                    sample=trajectories, feature_names=feature_names)
             stats = setup.new_statistics()
             for trajectory in trajectories:
                 setup.statistics(trajectory, into=stats)
@@ -129,23 +138,26 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         ``x`` itself; PySINDy's ``differentiate``)."""
         if self.discrete_time:
             raise ParameterError("a discrete-time model has no derivatives to estimate")
+        require_t("differentiate", t, needed=True)
         trajectories = as_trajectories(x, t)
         n = trajectories[0].x.shape[1]
         method = self.make_setup(n, 0, sample=trajectories).differentiation
-        out = [method(tr.x, tr.t)[1] for tr in trajectories]
+        out = [method.smooth_and_differentiate(tr.x, tr.t)[1] for tr in trajectories]
         return out if isinstance(x, (list, tuple)) else out[0]
 
-    def make_setup(self, n_states: int, n_inputs: int, *, sample=None) -> FitSetup:
+    def make_setup(self, n_states: int, n_inputs: int, *, sample=None,
+                   feature_names=None) -> FitSetup:
         """The frozen set-up (names, prior, library, optimizer, differentiation) of this
         model's parameters for ``n_states`` states and ``n_inputs`` inputs. Its
         :meth:`~FitSetup.statistics` of any number of trajectories, summed, go to
         :meth:`fit_statistics`. ``sample`` (a list of
         :class:`~discrepancy.data.Trajectory`) is needed when the differentiation method
-        is chosen from the data (the default)."""
+        is chosen from the data (the default); ``feature_names`` (states then inputs)
+        replace the model's names."""
         self._validate_params()
         validate_params("make_setup", {"n_states": n_states, "n_inputs": n_inputs},
                         {"n_states": [Interval(Integral, 1)], "n_inputs": [Interval(Integral, 0)]})
-        return resolve_setup(self, n_states, n_inputs, sample)
+        return resolve_setup(self, n_states, n_inputs, sample, feature_names)
 
     def fit_statistics(self, stats: GramStatistics, setup: FitSetup) -> DiscrepancyModel:
         """Fit from Gram statistics computed with ``setup`` (see :meth:`make_setup`);
@@ -183,12 +195,29 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         converged = getattr(optimizer, "converged_", None)
         self.converged_ = None if converged is None else dict(zip(
             self.state_names_, np.asarray(converged, dtype=bool).tolist(), strict=True))
+        self._compile()
+
+    def _compile(self) -> None:
+        """Compile the active terms of ``coef_`` (kept as ``_compiled_coef`` to notice edits)."""
         active = np.flatnonzero(np.any(self.coef_ != 0, axis=0))
-        functions = setup.library.user_functions()
+        functions = self.setup_.library.user_functions()
         self._active_terms = [compile_numpy(self.feature_expressions_[j], self.variable_names_,
                                             functions) for j in active]
         self._active_coef = self.coef_[:, active].T
+        self._compiled_coef = self.coef_.copy()
         self._compiled_steps = {}   # CasADi steppers of these coefficients, by substeps
+
+    def _sync(self) -> None:
+        """Recompile when ``coef_`` was edited in place since the fit (``coefficients()``
+        returns it, as PySINDy's does, so such edits change predict and simulate)."""
+        if not np.array_equal(self.coef_, self._compiled_coef):
+            if np.shape(self.coef_) != self._compiled_coef.shape or \
+                    not np.all(np.isfinite(self.coef_)):
+                raise ShapeError(f"coef_ must stay finite with shape "
+                                 f"{self._compiled_coef.shape}; it was changed to "
+                                 f"{describe(self.coef_)}")
+            self.coef_ = np.asarray(self.coef_, dtype=float)
+            self._compile()
 
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(Z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m`` ``(m, n)``."""
@@ -203,6 +232,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
 
     def _variables(self, x, u) -> tuple[np.ndarray, np.ndarray | None]:
         self.check_is_fitted()
+        self._sync()
         x = as_2d("x", x, n_cols=self.n_states_, allow_1d=self.n_states_ == 1)
         if self.n_inputs_ == 0:
             if u is not None:
@@ -211,6 +241,8 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         if u is None:
             raise ShapeError(f"u is required: the model was fitted with {self.n_inputs_} inputs "
                              f"{self.input_names_}")
+        if is_number(u):  # one number: a constant input (PySINDy broadcasts it too)
+            u = np.full((x.shape[0], 1), u)
         return x, as_2d("u", u, n_rows=x.shape[0], n_cols=self.n_inputs_, allow_1d=True)
 
     def _g(self, z: np.ndarray) -> np.ndarray:
@@ -240,8 +272,9 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         self.check_is_fitted()
         return int(np.count_nonzero(self.coef_))
 
-    def simulate(self, x0, t, *args, u=None, compiled: bool = True,
-                 **integrator_kws) -> np.ndarray:
+    def simulate(self, x0, t, *args, u=None, compiled: bool = True, integrator=None,
+                 integrator_kws=None, interpolator=None, interpolator_kws=None,
+                 stop_condition=None, **options) -> np.ndarray:
         """Trajectory of the hybrid model from ``x0`` ``(n,)`` at times ``t`` ``(k,)``.
 
         ``u`` is an array ``(k, r)`` sampled at ``t`` (between samples ``u_hold="linear"``,
@@ -254,19 +287,27 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         be expressed in it (``compiled=False`` steps in Python; same numbers): the fast way
         to simulate long records with measured inputs. A simulation that blows up or runs
         out of its evaluation budget raises SimulationError with the partial trajectory.
-        Returns ``(k, n)``. A discrete-time model iterates its map: ``t`` is the number of
-        states to return (row 0 is ``x0``) and ``u`` has one row (or call ``u(k)``) per step.
+        Returns ``(k, n)``. PySINDy's ``integrator`` (``"solve_ivp"``, ``"odeint"``),
+        ``integrator_kws``, ``interpolator`` and ``interpolator_kws`` are taken as PySINDy
+        takes them (:mod:`discrepancy.models.simulate_arguments`). A discrete-time model
+        iterates its map: ``t`` is the number of states to return (row 0 is ``x0``), ``u``
+        has one row (or call ``u(k)``) per step and ``stop_condition(x) -> bool`` ends the
+        run at the first state for which it is true (that state included), as in PySINDy.
         """
         keywords_only("simulate", args, "u")
         self.check_is_fitted()
+        self._sync()
         x0 = check_vector("x0", x0, self.n_states_)
         validate_params("simulate", {"compiled": compiled}, {"compiled": [bool]})
-        if not self.discrete_time:
-            from .simulation import check_options
-            check_options(integrator_kws)  # before any work that depends on them
+        from .simulate_arguments import map_options, simulation_options
+
+        pysindy = dict(integrator=integrator, integrator_kws=integrator_kws,
+                       interpolator=interpolator, interpolator_kws=interpolator_kws)
         if self.discrete_time:
             from .discrete import iterate
-            return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_)
+            return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_,
+                           stop_condition=map_options(stop_condition, pysindy, options))
+        u, integrator_kws = simulation_options(u, t, stop_condition, pysindy, options)
         if "method" not in integrator_kws and self._has_jumps():
             integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
         if integrator_kws.get("method") == "rk4" and compiled and not callable(u):
@@ -283,10 +324,12 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         ``substeps`` per sample, the input held by ``u_hold``). Compare with ``x[steps:]``."""
         keywords_only("predict_ahead", args, "u and the options")
         self.check_is_fitted()
+        self._sync()
         from .prediction import checked_states, predict_ahead
 
+        require_t("predict_ahead", t, needed=True)
         x = checked_states(self, x, u)
-        return predict_ahead(self._rhs_one, x, 1.0 if t is None else t, u,
+        return predict_ahead(self._rhs_one, x, t, u,
                              n_inputs=self.n_inputs_, steps=steps, u_hold=u_hold,
                              substeps=substeps)
 
@@ -306,9 +349,11 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
 
     # ----------------------------------------------------------------- output
     def coefficients(self) -> np.ndarray:
-        """``Ξ`` as ``(n_states, n_features)``, PySINDy's layout."""
+        """``Ξ`` as ``(n_states, n_features)``, PySINDy's layout: the model's own array, as
+        in PySINDy, so editing it in place changes the model (``predict``, ``simulate``,
+        ``equations``, files); copy it to keep a snapshot."""
         self.check_is_fitted()
-        return self.coef_.copy()
+        return self.coef_
 
     def get_feature_names(self) -> list[str]:
         """Names of the library's ``p`` terms, the column order of :meth:`coefficients`."""
@@ -323,13 +368,15 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         return equations(self, precision, uncertainty)
 
     def print(self, precision: int = 3, *, lhs=None, uncertainty=None) -> None:
-        """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2`` (with
+        """Print one line per state: ``(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2`` (a map:
+        ``(x1)[k+1] = ...``; with
         ``± std`` when ``uncertainty`` is given; ``lhs``: a list of left-hand sides to
         print instead of ``(x1)'``, ...), then, when the derivatives were estimated with a
         method chosen from the data, a ``#`` line saying which and why."""
         lines = self.equations(precision, uncertainty=uncertainty)
         if lhs is None:
-            lhs = [f"({name})'" for name in self.state_names_]
+            step = "[k+1]" if self.discrete_time else "'"
+            lhs = [f"({name}){step}" for name in self.state_names_]
         elif not isinstance(lhs, (list, tuple)) or len(lhs) != self.n_states_ or \
                 not all(isinstance(s, str) for s in lhs):
             raise ParameterError(f"lhs must be a list of {self.n_states_} strings (one per "
@@ -341,15 +388,21 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         if line:
             print(line)
 
-    def score(self, x, t=None, *args, u=None, x_dot=None, metric="r2") -> float:
+    def score(self, x, t=None, *args, u=None, x_dot=None, metric="r2", **metric_kws):
         """Goodness of fit on data: ``"r2"`` (mean over states) or ``"rmse"`` of the
-        derivatives, a callable ``metric(truth, prediction)`` of them (e.g. a
+        derivatives, a callable ``metric(truth, prediction, **metric_kws)`` of them (e.g. a
         ``sklearn.metrics`` function), or ``"trajectory"``: ``‖x_sim − x‖ / ‖x‖``
-        simulating from ``x[0]`` (one trajectory)."""
+        simulating from ``x[0]`` (one trajectory). ``t`` is required unless ``x_dot`` is
+        given (or the model is discrete-time). ``metric_kws`` go to the metric, as in
+        PySINDy (with ``"r2"``: to ``sklearn.metrics.r2_score``, e.g.
+        ``multioutput="raw_values"``)."""
         from .scoring import score
         keywords_only("score", args, "u, x_dot and metric")
         self.check_is_fitted()
-        return score(self, x, t, u, x_dot, metric=metric)
+        self._sync()
+        require_t("score", t, needed=not self.discrete_time and
+                  (x_dot is None or metric == "trajectory"))
+        return score(self, x, t, u, x_dot, metric=metric, metric_kws=metric_kws)
 
     def bootstrap(self, x, t=None, *args, u=None, x_dot=None, n_resamples: int = 200,
                   block_length: int | None = None, method: str = "wild", seed: int = 0,
@@ -364,6 +417,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, Estimator):
         """
         from .uncertainty import bootstrap
         keywords_only("bootstrap", args, "u, x_dot and the options")
+        require_t("bootstrap", t, needed=x_dot is None and not self.discrete_time)
         return bootstrap(self, x, t, u, x_dot, n_resamples=n_resamples,
                          block_length=block_length, method=method, seed=seed,
                          sample_weight=sample_weight)

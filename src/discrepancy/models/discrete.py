@@ -45,13 +45,18 @@ def discrete_rows(setup, trajectory):
     return z, y, x[1:]
 
 
-def iterate(step, x0, steps, u, n_states: int, n_inputs: int) -> np.ndarray:
+def iterate(step, x0, steps, u, n_states: int, n_inputs: int, *,
+            stop_condition=None) -> np.ndarray:
     """States ``(steps, n)`` of ``x[k+1] = step(x[k], u[k])`` from ``x0`` (row 0 is ``x0``).
 
     ``steps``: the number of states to return (an int), or an array of that length (its
     values are not used: a map has no time). ``u``: ``(steps, r)`` (row ``k`` acts on step
-    ``k``; the last row is not used) or a callable of the step index.
+    ``k``; the last row is not used) or a callable of the step index. ``stop_condition(x)``:
+    the run ends at the first new state ``x`` ``(n,)`` for which it is true (PySINDy's).
     """
+    if stop_condition is not None and not callable(stop_condition):
+        raise ParameterError(f"stop_condition must be a callable stop_condition(x) -> bool; "
+                             f"got {type(stop_condition).__name__}")
     n_steps = len(steps) if np.ndim(steps) == 1 else steps
     if not isinstance(n_steps, (int, np.integer)) or isinstance(n_steps, bool) or n_steps < 1:
         raise ParameterError(f"t must be the number of steps (an integer >= 1) or an array of "
@@ -74,4 +79,6 @@ def iterate(step, x0, steps, u, n_states: int, n_inputs: int) -> np.ndarray:
         out[k + 1] = step(out[k:k + 1], uk)[0]
         if not np.all(np.isfinite(out[k + 1])):
             raise ConvergenceError(f"the map diverged at step {k + 1} (x = {out[k]})")
+        if stop_condition is not None and stop_condition(out[k + 1].copy()):
+            return out[:k + 2]
     return out

@@ -105,7 +105,7 @@ def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
     for i, row in enumerate(model.coef_):
         parts = [] if model.prior is None else ["prior"]
         for j, (c, name) in enumerate(zip(row, names, strict=True)):
-            if c != 0:
+            if round(c, precision) != 0:   # terms that print as 0 are left out, as in PySINDy
                 size = f"{abs(c):.{precision}f}"
                 if std is not None:
                     size = f"({size} ± {std[i, j]:.{precision}f})"
@@ -122,6 +122,8 @@ def choice_line(model) -> str:
     choice = getattr(model, "differentiation_choice_", None)
     if not choice:
         return ""
-    noise = ", ".join(f"{v:.3g}" for v in choice.get("noise_std", []))
-    return (f"# derivatives: {model.differentiation_method_!r}, chosen by {choice['chosen_by']} "
-            f"from the data; noise std of the states ≈ [{noise}]")
+    line = f"# derivatives: {model.differentiation_method_!r}, chosen by {choice['chosen_by']}"
+    if "noise_std" not in choice:  # a fallback for short records estimates no noise
+        return line
+    noise = ", ".join(f"{v:.3g}" for v in choice["noise_std"])
+    return f"{line} from the data; noise std of the states ≈ [{noise}]"

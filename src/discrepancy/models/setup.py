@@ -86,13 +86,31 @@ class FitSetup:
             return discrete_rows(self, trajectory)
         if trajectory.x_dot is None and isinstance(self.differentiation, WeakForm):
             return self._weak_rows(trajectory)
+        u = trajectory.u
         if trajectory.x_dot is None:
-            xs, xd = self.differentiation(trajectory.x, trajectory.t)
+            xs, xd = self.differentiation.smooth_and_differentiate(trajectory.x, trajectory.t)
+            kept = self._kept(trajectory)  # ends a method leaves undefined (drop_endpoints)
+            xs, xd, u = xs[kept], xd[kept], None if u is None else u[kept]
         else:
             xs, xd = trajectory.x, trajectory.x_dot
-        y = xd - self.prior(xs, trajectory.u)
-        z = xs if trajectory.u is None else np.hstack([xs, trajectory.u])
+        y = xd - self.prior(xs, u)
+        z = xs if u is None else np.hstack([xs, u])
         return z, y, xd
+
+    def _kept(self, trajectory: Trajectory) -> slice:
+        """The rows of ``trajectory`` that give regression rows (all but the ends a
+        differentiation method with ``drop_endpoints`` leaves undefined)."""
+        if trajectory.x_dot is not None or self.discrete_time:
+            return slice(None)
+        first, last = self.differentiation.dropped_rows
+        return slice(first, trajectory.n_samples - last)
+
+    def row_weights(self, trajectory: Trajectory) -> np.ndarray | None:
+        """The sample weights from the first of :meth:`rows`' rows on (``None`` when
+        unweighted; a map's last sample, which has no successor, gives no row)."""
+        if trajectory.weight is None:
+            return None
+        return trajectory.weight[self._kept(trajectory)]
 
     def _weak_rows(self, trajectory: Trajectory):
         from ..resources import CHUNKED, check_memory, n_bytes
@@ -164,8 +182,24 @@ class FitSetup:
 
         stats = self.new_statistics() if into is None else into
         z, y, x_dot = self.rows(trajectory)
-        weight = None if trajectory.weight is None else trajectory.weight[:len(z)]
-        return accumulate(stats, self.transform, z, y, x_dot, weight, names=self.names)
+        weight = self.row_weights(trajectory)
+        weight = None if weight is None else weight[:len(z)]
+        first = stats.count
+        accumulate(stats, self.transform, z, y, x_dot, weight, names=self.names)
+        if self.optimizer.needs_rows:  # trimming or bagging samples: keep the rows too
+            self._keep_rows(stats, z, y, x_dot, weight, first)
+        return stats
+
+    def _keep_rows(self, stats, z, y, x_dot, weight, first: int) -> None:
+        from ..optimizers.resampling import Rows
+        from ..resources import check_memory, n_bytes
+
+        check_memory(f"the {len(z)} rows of Θ that {self.optimizer!r} needs",
+                     n_bytes((len(z), self.n_features)), "Use a smaller library or fewer "
+                     "samples, or a solver that works on the statistics alone")
+        fold = ((first + np.arange(len(z))) // stats.segment) % stats.n_folds
+        rows = Rows(self.transform(z), y, x_dot, weight, fold)
+        stats.rows = rows if stats.rows is None else stats.rows + rows
 
 
 def _copy_into(theta: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarray:
@@ -175,22 +209,29 @@ def _copy_into(theta: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarra
     return out
 
 
-def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
+def resolve_setup(model, n_states: int, n_inputs: int, sample=None,
+                  feature_names=None) -> FitSetup:
     """The set-up of ``model``'s parameters for ``n_states`` states and ``n_inputs`` inputs:
     names checked, defaults filled in, library specs parsed and bound, copies of the
     optimizer and differentiation method (the model's own parameters are never changed).
 
     ``sample``: trajectories a data-driven differentiation method (the default ``"auto"``)
-    is chosen from; those with measured ``x_dot`` need none."""
+    is chosen from; those with measured ``x_dot`` need none. ``feature_names``: the names of
+    the states then the inputs, replacing the model's (PySINDy's ``fit(feature_names=)``)."""
     import copy
 
     from ..differentiation import get_differentiation_method
     from ..libraries import PolynomialLibrary
     from ..libraries.spec import parse_library
     from ..optimizers import get_optimizer
+    from .names import check_default_names, referenced_names
 
-    states = resolve_names("state_names", model.state_names, n_states, "x", one=None)
-    inputs = resolve_names("input_names", model.input_names, n_inputs, "u", one="u")
+    given_states, given_inputs = model.state_names, model.input_names
+    if feature_names is not None:
+        names = resolve_names("feature_names", feature_names, n_states + n_inputs, "", one=None)
+        given_states, given_inputs = names[:n_states], names[n_states:]
+    states = resolve_names("state_names", given_states, n_states, "x", one=None)
+    inputs = resolve_names("input_names", given_inputs, n_inputs, "u", one="u")
     clash = sorted(set(states) & set(inputs))
     if clash:
         raise ParameterError(f"state_names and input_names must not share names; both have "
@@ -200,6 +241,9 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None) -> FitSetup:
         library = PolynomialLibrary(degree=2)
     elif isinstance(library, str):
         library = parse_library(library)
+    check_default_names(referenced_names(model.constraints, library), states, inputs,
+                        default_states=given_states is None,
+                        default_inputs=given_inputs is None)
     library = copy.deepcopy(library).fit([*states, *inputs])
     if model.discrete_time:
         from .discrete import NextSample

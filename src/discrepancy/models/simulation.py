@@ -21,9 +21,11 @@ from ..errors import ParameterError, ShapeError, SimulationError, describe
 from .inputs import input_law, stage_inputs
 
 ADAPTIVE = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
-METHODS = (*ADAPTIVE, "rk4")
+METHODS = (*ADAPTIVE, "odeint", "rk4")
 #: options passed on to scipy's adaptive solvers
 SOLVER_OPTIONS = ("first_step", "max_step", "min_step", "jac", "jac_sparsity", "lband", "uband")
+#: options passed on to scipy's ``odeint`` (PySINDy's ``integrator="odeint"``)
+ODEINT_OPTIONS = ("mxstep", "hmax", "hmin", "h0", "tcrit", "mxordn", "mxords")
 #: right-hand-side evaluations allowed per output sample (and at least MIN_EVALUATIONS)
 EVALUATIONS_PER_SAMPLE = 500
 MIN_EVALUATIONS = 100_000
@@ -37,12 +39,15 @@ class _Stop(Exception):
 
 def _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws):
     adaptive = isinstance(method, str) and method in ADAPTIVE
-    unknown = sorted(set(solver_kws) - set(SOLVER_OPTIONS if adaptive else ()))
+    odeint = isinstance(method, str) and method == "odeint"
+    own = SOLVER_OPTIONS if adaptive else ODEINT_OPTIONS if odeint else ()
+    unknown = sorted(set(solver_kws) - set(own))
     if unknown:
         raise ParameterError(f"simulate got unknown option(s) {unknown} for method "
                              f"{method!r}; valid: method, rtol, atol, u_hold, substeps, "
-                             f"max_evaluations, compiled, {', '.join(SOLVER_OPTIONS)} (the last "
-                             "ones for adaptive methods)")
+                             f"max_evaluations, compiled, integrator, integrator_kws, "
+                             f"interpolator, interpolator_kws, {', '.join(SOLVER_OPTIONS)} (for "
+                             f"adaptive methods), {', '.join(ODEINT_OPTIONS)} (for odeint)")
     if not isinstance(method, str) or method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     for name, value in (("rtol", rtol), ("atol", atol)):
@@ -79,8 +84,9 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
     """Solve ``dx/dt = rhs(x, u(t))`` from ``x0`` and return the states at ``t`` ``(k, n)``.
 
     Args:
-        method: an adaptive scipy method (``"LSODA"`` default) or ``"rk4"`` (fixed steps,
-            ``substeps`` per output interval, the input taken at the stage times).
+        method: an adaptive scipy method (``"LSODA"`` default), ``"odeint"`` (scipy's
+            ``odeint``) or ``"rk4"`` (fixed steps, ``substeps`` per output interval, the input
+            taken at the stage times).
         rtol, atol: tolerances of the adaptive methods.
         u_hold: ``"linear"``, ``"zoh"`` or ``"bandlimited"`` between input samples (see
             :mod:`discrepancy.models.inputs`).
@@ -129,6 +135,8 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
                         tau, x)
         return dx
 
+    if method == "odeint":
+        return _odeint(f, law, times, out, rtol, atol, solver_kws)
     try:
         with np.errstate(over="ignore", invalid="ignore"):
             if method == "rk4":
@@ -175,6 +183,24 @@ def _adaptive(f, times, out, method, rtol, atol, solver_kws):
             while i < len(times) and (times[i] <= solver.t or solver.status == "finished"):
                 out[i] = dense(times[i])
                 i += 1
+
+
+def _odeint(f, law, times, out, rtol, atol, options):
+    """scipy's ``odeint`` (ODEPACK's LSODA, PySINDy's ``integrator="odeint"``); stopped by
+    the same budget and checks as the other methods."""
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):
+            states, info = scipy.integrate.odeint(
+                lambda x, tau: f(tau, x, None if law is None else law(tau)), out[0], times,
+                rtol=rtol, atol=atol, full_output=True, **options)
+    except _Stop as stop:
+        _raise_stopped(stop.why, stop.time, stop.state, out, times)
+    if info["message"] != "Integration successful.":
+        reached = int(np.sum(info["tcur"] >= times[1:] - 1e-12 * abs(times[-1])))
+        out[1:reached + 1] = states[1:reached + 1]
+        _raise_stopped(f"odeint failed ({info['message']})", times[reached],
+                       states[reached], out, times)
+    return states
 
 
 def _fixed_step(f, times, out, substeps, stages):

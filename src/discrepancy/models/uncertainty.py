@@ -26,6 +26,7 @@ import numpy as np
 from ..constraints import InstanceOf, Integral, Interval, Options, validate_params
 from ..errors import ParameterError
 from ..optimizers import GramStatistics
+from ..optimizers.resampling import from_blocks
 from ..resources import check_memory, n_bytes
 from .checks import model_data
 
@@ -84,6 +85,20 @@ class CoefficientUncertainty:
     def __str__(self) -> str:
         return self.table()
 
+    @classmethod
+    def from_ensemble(cls, model) -> CoefficientUncertainty:
+        """The ensemble's models as samples: a model fitted with an
+        :class:`~discrepancy.optimizers.EnsembleOptimizer` gets the bootstrap's table,
+        intervals and ``model.print(uncertainty=...)`` (``block_length`` 1: samples were
+        drawn one by one)."""
+        model.check_is_fitted()
+        samples = getattr(model.optimizer_, "coef_list_", None)
+        if samples is None:
+            raise ParameterError(f"from_ensemble needs a model fitted with an "
+                                 f"EnsembleOptimizer; this one's is {model.optimizer_!r}")
+        return cls(model.coef_.copy(), np.asarray(samples), list(model.state_names_),
+                   model.get_feature_names(), 1)
+
 
 def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int | None = None,
                      sample_weight=None):
@@ -111,12 +126,13 @@ def block_statistics(model, x, t=None, u=None, x_dot=None, *, block_length: int 
     blocks, folds, row = [], [], 0
     for tr in trajectories:
         z, y, xd = setup.rows(tr)
+        row_weight = setup.row_weights(tr)
         start = 0
         while start < len(z):  # blocks on the grid of data rows, so they nest in segments
             stop = min(len(z), start + length - (row + start) % length)
             stats = GramStatistics(setup.n_features, setup.n_states)
             rows = slice(start, stop)
-            weight = None if tr.weight is None else tr.weight[rows]
+            weight = None if row_weight is None else row_weight[rows]
             blocks.append(stats.add(setup.transform(z[rows]), y[rows], xd[rows], weight))
             folds.append(((row + start) // segment) % n_folds)
             start = stop
@@ -150,18 +166,6 @@ def _wild(gram, rhs, yy, coef, rng):
     return fitted + s[:, None, None] * cross, fit_sq + res_sq + 2 * s[:, None] * mixed
 
 
-def _resampled_statistics(gram, rhs, yy, signal, counts, folds, n_folds, segment):
-    """GramStatistics with folds from per-block sums (``(B, ...)`` arrays)."""
-    stats = GramStatistics(gram.shape[1], rhs.shape[2], n_folds, segment)
-    for f, fold in enumerate(stats.folds):
-        pick = folds == f
-        fold.gram, fold.rhs = gram[pick].sum(0), rhs[pick].sum(0)
-        fold.yy, fold.signal = yy[pick].sum(0), signal[pick].sum(0)
-        fold.count = int(counts[pick].sum())
-    stats._sum_folds()
-    return stats
-
-
 def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
               block_length: int | None = None, method: str = "wild", seed: int = 0,
               sample_weight=None) -> CoefficientUncertainty:
@@ -186,13 +190,12 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
     for r in tqdm(range(n_resamples), desc="bootstrap", disable=None, leave=False):
         if method == "wild":
             b, sq = _wild(gram, rhs, yy, model.coef_, rng)
-            stats = _resampled_statistics(gram, b, sq, signal, counts, folds,
-                                          template.n_folds, template.segment)
+            stats = from_blocks(gram, b, sq, signal, counts, folds, template)
         else:
             w = np.bincount(rng.integers(0, len(gram), len(gram)), minlength=len(gram))
-            stats = _resampled_statistics(gram * w[:, None, None], rhs * w[:, None, None],
-                                          yy * w[:, None], signal * w[:, None], counts * w,
-                                          folds, template.n_folds, template.segment)
+            stats = from_blocks(gram * w[:, None, None], rhs * w[:, None, None],
+                                yy * w[:, None], signal * w[:, None], counts * w, folds,
+                                template)
         opt = copy.deepcopy(model.optimizer_)
         opt.fit_statistics(stats)
         samples[r] = opt.coef_

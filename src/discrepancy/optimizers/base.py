@@ -58,20 +58,35 @@ class Optimizer(Estimator, ABC):
 
     normalize_columns: bool = False
 
-    def fit(self, theta, y) -> Optimizer:
+    @property
+    def needs_rows(self) -> bool:
+        """Whether this solver needs the rows themselves, not only their Gram statistics
+        (trimming samples, bagging samples): then it fits in memory only."""
+        return False
+
+    def fit(self, theta, y, sample_weight=None) -> Optimizer:
         """Fit on a feature matrix ``theta`` ``(m, p)`` and targets ``y`` ``(m,)`` or
-        ``(m, n)``, rows in time order."""
-        from ..data.trajectory import as_2d
+        ``(m, n)``, rows in time order; ``sample_weight``: a number or ``(m,)`` weights of
+        the rows (PySINDy's: each row scaled by the square root of its weight)."""
+        from ..data.trajectory import as_2d, check_weight
+        from .resampling import Rows
 
         theta = as_2d("theta", theta)
         y = as_2d("y", y, n_rows=theta.shape[0], allow_1d=True)
+        weight = check_weight("sample_weight", sample_weight, theta.shape[0])
+        if weight is not None and not np.any(weight > 0):
+            raise DataError("sample_weight must have at least one positive weight; all are 0")
         segment = max(1, -(-theta.shape[0] // (2 * FIT_FOLDS)))
         with np.errstate(over="ignore", invalid="ignore"):
-            stats = GramStatistics(theta.shape[1], y.shape[1], FIT_FOLDS, segment).add(theta, y)
+            stats = GramStatistics(theta.shape[1], y.shape[1], FIT_FOLDS, segment).add(
+                theta, y, weight=weight)
         for name, sums, a in (("theta", stats.gram, theta), ("y", stats.yy, y)):
             if not np.all(np.isfinite(sums)):
                 raise DataError(f"{name}'s sums of squares overflow (largest |{name}| = "
                                 f"{np.max(np.abs(a)):.3g}); scale {name} down")
+        if self.needs_rows:
+            fold = (np.arange(theta.shape[0]) // segment) % FIT_FOLDS
+            stats.rows = Rows(theta, y, y, weight, fold)
         return self.fit_statistics(stats)
 
     def fit_gram(self, gram, rhs, *, n_samples: int | None = None, yy=None) -> Optimizer:
@@ -107,6 +122,11 @@ class Optimizer(Estimator, ABC):
         self._validate_params()
         if not isinstance(stats, GramStatistics):
             raise ParameterError(f"stats must be GramStatistics; got {describe(stats)}")
+        if self.needs_rows and stats.rows is None:
+            raise ParameterError(f"{self!r} needs the samples themselves ({self._rows_reason}), "
+                                 "which statistics alone (a stream, Dask, fit_gram) do not "
+                                 "keep: fit in memory (fit(theta, y), or a model's fit on "
+                                 "arrays)")
         for name in ("gram", "rhs", "yy"):
             value = getattr(stats, name)
             if value is not None and not np.all(np.isfinite(value)):
@@ -127,6 +147,19 @@ class Optimizer(Estimator, ABC):
         self.ind_ = np.abs(self.coef_) > 0
         return self
 
+    def predict(self, theta) -> np.ndarray:
+        """``Θ ξ``: the fitted targets ``(m, n_targets)`` of rows ``theta`` ``(m, p)``."""
+        from ..data.trajectory import as_2d
+
+        self.check_is_fitted()
+        return as_2d("theta", theta, n_cols=self.coef_.shape[1]) @ self.coef_.T
+
+    @property
+    def complexity(self) -> int:
+        """Number of nonzero coefficients (PySINDy's ``complexity``)."""
+        self.check_is_fitted()
+        return int(np.count_nonzero(self.coef_))
+
     @abstractmethod
     def _solve(self, stats: GramStatistics, scale: np.ndarray) -> np.ndarray:
         """Hook: coefficients ``(n_targets, p)`` from the (possibly normalised) statistics
@@ -135,6 +168,7 @@ class Optimizer(Estimator, ABC):
         applied (``ξ = scale * ξ_scaled``), for solvers with constraints in original units."""
 
     _fit_hint = "fit or fit_gram"
+    _rows_reason = ""
 
 
 #: the optimizers by spec name (``"stlsq"``, ``"lasso"``, ...)
@@ -144,7 +178,17 @@ register = OPTIMIZERS.register
 
 def get_optimizer(optimizer=None, **params) -> Optimizer:
     """An Optimizer from an instance, a registered name or spec text (``"stlsq(threshold=0.1)"``),
-    a ``{"name", "params"}`` mapping, or ``None`` (``STLSQ(threshold="auto")``)."""
+    a ``{"name", "params"}`` mapping, ``None`` (``STLSQ(threshold="auto")``), or a
+    scikit-learn regressor (wrapped as PySINDy uses one: :mod:`.wrapped`)."""
     if optimizer is None:
         optimizer, params = "stlsq", {"threshold": "auto", **params}
+    if is_regressor(optimizer):
+        return OPTIMIZERS.create("wrapped", optimizer=optimizer, unbias=False)
     return OPTIMIZERS.create(optimizer, **params)
+
+
+def is_regressor(value) -> bool:
+    """A scikit-learn style regressor (an instance with ``fit`` and ``get_params``) that is
+    not one of this package's solvers: PySINDy takes one as a model's optimizer."""
+    return not isinstance(value, (type, Optimizer, str)) and callable(getattr(value, "fit", None)) \
+        and callable(getattr(value, "get_params", None))

@@ -37,6 +37,8 @@ class GramStatistics:
             GramStatistics), or ``None`` when not kept.
         segment: rows per contiguous segment of the fold assignment (row ``i`` of the data,
             counted over all trajectories in order, is in fold ``(i // segment) % n_folds``).
+        rows: the rows themselves (:class:`~discrepancy.optimizers.resampling.Rows`), kept
+            only for solvers that need them (``needs_rows``: trimming, bagging samples).
     """
 
     p: int
@@ -49,6 +51,7 @@ class GramStatistics:
     signal: np.ndarray = field(init=False)
     count: int = 0
     folds: list | None = field(init=False, default=None)
+    rows: object = field(init=False, default=None, repr=False)
 
     def __post_init__(self):
         sizes = {"p": self.p, "n": self.n, "n_folds": self.n_folds, "segment": self.segment}
@@ -118,6 +121,8 @@ class GramStatistics:
             raise ShapeError(f"cannot merge statistics of (p={other.p}, n={other.n}, "
                              f"{other.n_folds} folds of {other.segment} rows) into (p={self.p}, "
                              f"n={self.n}, {self.n_folds} folds of {self.segment} rows)")
+        if other.rows is not None:  # rows are kept beside the sums, not summed with them
+            self.rows = other.rows if self.rows is None else self.rows + other.rows
         if self.folds is not None:
             for mine, theirs in zip(self.folds, other.folds, strict=True):
                 mine += theirs
@@ -149,6 +154,7 @@ class GramStatistics:
             new.gram = old.gram * np.outer(scale, scale)
             new.rhs = old.rhs * scale[:, None]
             new.yy, new.signal, new.count = old.yy, old.signal, old.count
+        out.rows = None if self.rows is None else self.rows.scaled(scale)
         return out
 
     def usable_folds(self) -> list[GramStatistics]:

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from ..errors import ConvergenceError, ShapeError
+from ..errors import ConvergenceError, ParameterError, ShapeError
 
 FEASIBILITY = 1e-9
 
@@ -33,6 +33,10 @@ class LinearConstraints:
         mask: ``(n, p)`` booleans: terms each equation may use (``None``: all).
         eq_lhs, eq_rhs: ``(k, n p)``, ``(k,)``: ``eq_lhs @ vec(Ξ) = eq_rhs``.
         ub_lhs, ub_rhs: ``(l, n p)``, ``(l,)``: ``ub_lhs @ vec(Ξ) <= ub_rhs``.
+        order: the layout of the given ``eq_lhs``/``ub_lhs`` columns: ``"target"`` (column
+            ``i p + j``: term ``j`` of equation ``i``) or PySINDy's other
+            ``constraint_order``, ``"feature"`` (column ``j n + i``); stored in target order
+            (``order`` then reads ``"target"``).
     """
 
     n: int
@@ -42,9 +46,13 @@ class LinearConstraints:
     eq_rhs: np.ndarray | None = None
     ub_lhs: np.ndarray | None = None
     ub_rhs: np.ndarray | None = None
+    order: str = "target"
 
     def __post_init__(self):
         size = self.n * self.p
+        if self.order not in ("target", "feature"):
+            raise ParameterError(f"order must be 'target' or 'feature' (PySINDy's "
+                                 f"constraint_order); got {self.order!r}")
         if self.mask is not None and np.shape(self.mask) != (self.n, self.p):
             raise ShapeError(f"mask must be ({self.n}, {self.p}); got {np.shape(self.mask)}")
         for lhs, rhs, what in ((self.eq_lhs, self.eq_rhs, "equality"),
@@ -55,6 +63,12 @@ class LinearConstraints:
                                     np.shape(rhs) != (np.shape(lhs)[0],)):
                 raise ShapeError(f"{what} constraints must be (k, {size}) and (k,); got "
                                  f"{np.shape(lhs)} and {np.shape(rhs)}")
+        if self.order == "feature":
+            for name in ("eq_lhs", "ub_lhs"):
+                if getattr(self, name) is not None:
+                    object.__setattr__(self, name, reorder(np.asarray(getattr(self, name),
+                                                                      float), self.n, self.p))
+            object.__setattr__(self, "order", "target")
 
     def scaled(self, scale: np.ndarray) -> LinearConstraints:
         """The same constraints on coefficients of columns scaled by ``scale`` ``(p,)``
@@ -82,6 +96,12 @@ class LinearConstraints:
         if self.eq_lhs is None:
             return np.zeros((self.n, self.p), bool)
         return np.any(np.asarray(self.eq_lhs) != 0, axis=0).reshape(self.n, self.p)
+
+
+def reorder(lhs: np.ndarray, n: int, p: int) -> np.ndarray:
+    """Constraint columns in PySINDy's "feature" order (``j n + i``) put in target order
+    (``i p + j``) for ``n`` equations of ``p`` terms."""
+    return lhs.reshape(len(lhs), p, n).transpose(0, 2, 1).reshape(len(lhs), n * p)
 
 
 def constrained_solve(gram, rhs, support, constraints: LinearConstraints,

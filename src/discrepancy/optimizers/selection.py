@@ -28,7 +28,6 @@ from copy import copy
 
 import numpy as np
 
-from ..errors import DataError
 from .base import solve_normal
 from .linear_constraints import LinearConstraints
 
@@ -90,6 +89,20 @@ def cross_validated_errors(stats, i: int, support: np.ndarray, alpha: float) -> 
     return errors
 
 
+def cross_validates(stats) -> bool:
+    """Whether the statistics hold the two folds cross-validation needs; statistics with
+    folds but too few samples for two fall back to BIC with a ShortRecordWarning
+    (:func:`discrepancy.short_records.too_short`)."""
+    if stats.folds is None:
+        return False
+    from ..short_records import too_short
+
+    return not too_short(f"threshold='auto' (cross-validation over blocks of {stats.segment} "
+                         "samples)", stats.count, stats.segment + 1,
+                         fallback="the Bayesian information criterion") \
+        and len(stats.usable_folds()) >= 2
+
+
 def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.ndarray,
                                                                  list[dict]]:
     """Per target, the selected STLSQ solution over the threshold path (within the
@@ -101,12 +114,7 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
     """
     p, n = stats.rhs.shape
     coef, chosen_thresholds, selection = np.zeros((n, p)), np.zeros(n), []
-    use_cv = len(stats.usable_folds()) >= 2
-    if stats.folds is not None and not use_cv:
-        raise DataError(f"threshold='auto' cross-validates over contiguous blocks of "
-                        f"{stats.segment} samples and needs at least two; these data have "
-                        f"{stats.count} samples. Give more (or longer) trajectories, or a fixed "
-                        "threshold, e.g. STLSQ(threshold=0.05)")
+    use_cv = cross_validates(stats)
     alpha = 0.0 if stlsq.unbias else stlsq.alpha
     for i in range(n):
         mask = None if constraints is None else LinearConstraints(
@@ -121,8 +129,10 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
             best = int(np.argmin(error))
             ok = [j for j in range(len(path)) if error[j] <= error[best] + se[best]]
             pick = min(ok, key=lambda j: (path[j][1].sum(), error[j]))
-        else:
-            error = np.array([bic(_rss(stats, i, _refit(stats.gram, stats.rhs[:, i], s, alpha)),
+        else:  # residuals below FLOOR of the signal are numerical, as in the folds
+            floor = FLOOR * max(stats.signal[i], stats.yy[i])
+            error = np.array([bic(max(_rss(stats, i, _refit(stats.gram, stats.rhs[:, i], s,
+                                                             alpha)), floor),
                                   int(s.sum()), stats.count) for _, s in path])
             se = np.zeros_like(error)
             pick = int(np.argmin(error))

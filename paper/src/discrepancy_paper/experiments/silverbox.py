@@ -45,8 +45,8 @@ def load():
 
 def linear_prior(y, u, t):
     """``[v, a y + b v + c u]`` with ``a, b, c`` from least squares on spectral derivatives."""
-    _, v = dc.Spectral()(y[:, None], t)
-    _, acc = dc.Spectral()(v, t)
+    v = dc.Spectral()(y[:, None], t)
+    acc = dc.Spectral()(v, t)
     keep = slice(500, -500)                         # away from the record's ends
     a, b, c = np.linalg.lstsq(np.c_[y, v[:, 0], u][keep], acc[keep, 0], rcond=None)[0]
     ys, vs, us = sp.symbols("y v u", real=True)
