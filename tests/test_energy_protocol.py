@@ -100,23 +100,39 @@ def test_default_procedures_vary_fit_selection_and_library(swing):
     windows = sorted({p["fit_window"] or 0.0 for p in params})
     assert windows == pytest.approx([0.0, 9.6, 16.0])    # all data, last 30 % and 50 %
     sizes = {len(p["friction_terms"]) for p in params}
-    assert sizes == {4, 3}      # viscous, Coulomb, air drag (+ Stribeck)
+    assert sizes == {6, 3}      # viscous, Coulomb, air drag (+ Stribeck at 3 speeds)
 
 
 def test_fit_window_fits_the_last_seconds_and_anchors_there(swing):
-    """A fit on the last 8 s equals a fit on those samples given alone; anchored() puts
-    model and dH at the window's start, where the law's prediction begins."""
+    """A fit on the last 8 s recovers the true friction from those seconds alone (a fit on
+    the first 8 s of the same swing would see 3 times the speeds); anchored() puts model and
+    dH at the window's start, where the law's prediction begins."""
     system, q, t, _ = swing
     windowed = dc.DissipationDiscrepancy(system.energy, fit_window=8.0).fit(q, t)
-    keep = t >= t[-1] - 8.0
-    alone = dc.DissipationDiscrepancy(system.energy).fit(q[keep], t[keep])
-    np.testing.assert_allclose(windowed.coef_, alone.coef_, rtol=1e-12)
-    assert windowed.fit_start_ == pytest.approx(alone.fit_start_)
+    laws = dict(zip([term.name for term in windowed.terms_], windowed.coef_, strict=True))
+    assert laws["viscous joint 1"] == pytest.approx(K, rel=0.05)
+    assert laws["Coulomb joint 1"] == pytest.approx(F, rel=0.05)
     x, times = windowed.states(q, t)
+    assert windowed.fit_start_ == pytest.approx(times[-1] - 8.0, abs=1e-3)
     dh, model = windowed.anchored(x, times)
     k = int(np.argmin(np.abs(times - windowed.fit_start_)))
     assert dh[k] == 0 and model[k] == pytest.approx(windowed.offset_)
     assert np.sqrt(np.mean((dh[k:] - model[k:]) ** 2)) < 0.01 * np.ptp(dh[k:])
+
+
+def test_origin_fits_share_the_recording_but_read_nothing_after_their_origin(swing):
+    """A procedure fitted from the shared prepared training part up to an origin equals the
+    same procedure fitted on the positions before that origin alone."""
+    system, q, t, split = swing
+    model = dc.DissipationDiscrepancy(system.energy, block_seconds=1.0, holdout=0.2)
+    record = model.prepare(*model.states(q[:split], t[:split]))
+    edge = 15                                  # the default smoother's half window
+    shared = dc.DissipationDiscrepancy(**model.get_params()).fit_prepared(record,
+                                                                          12000 - 2 * edge)
+    alone = dc.DissipationDiscrepancy(**model.get_params()).fit(q[:12000], t[:12000])
+    assert [term.name for term in shared.terms_] == [term.name for term in alone.terms_]
+    np.testing.assert_allclose(shared.coef_, alone.coef_, rtol=1e-9)
+    assert shared.offset_ == pytest.approx(alone.offset_, rel=1e-9)
 
 
 def test_from_system_takes_names_and_relative_joints_from_the_system():
