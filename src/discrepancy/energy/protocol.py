@@ -3,9 +3,13 @@
 Each candidate procedure (a :class:`DissipationDiscrepancy` with its library, fit and term
 selection) is fitted on ``[0, origin)`` and forecasts the next ``horizon`` seconds, from
 several origins inside the training part (rolling origin; the last window ends where
-training ends). The procedure with the lowest median forecast error is frozen and fitted on
-the whole training part before the validation part is touched (near ties, within 2 %, go to
-the first candidate, so the simpler procedure listed first). The spread of the chosen
+training ends). The procedure whose largest forecast error over the origins is lowest is
+frozen and fitted on the whole training part before the validation part is touched (near
+ties, within 2 %, go to the first candidate, so the simpler procedure listed first). The
+largest error, not the median, decides: on the measured double pendulum the median chose a
+law that forecast well from the three earliest origins and missed by 40-48 % from the two
+latest, and then missed validation by 33 %; on simulated recordings both rules chose equally
+well (see the energy-systems experiment). The spread of the chosen
 procedure's own forecast errors, as a function of the lead time, is the error of the law's
 form that a coefficient bootstrap does not see: :meth:`BlindFit.forecast_band` adds it.
 Written here because no library does rolling-origin selection of constrained energy laws.
@@ -44,7 +48,8 @@ class BlindFit:
         chosen: name of the chosen procedure.
         model: the chosen procedure fitted on the whole training part.
         procedures: per candidate, its forecast errors (% of each window's ``dH`` range)
-            from every origin, their median, the terms it fits on the whole training part,
+            from every origin, their median and largest (the score of the choice), the terms
+            it fits on the whole training part,
             whether that law is sound and which constraints hold it at its bound.
         origins: forecast origins (s); horizon: forecast length (s).
         lead_errors: per procedure, its forecast errors relative to each window's ``dH``
@@ -246,6 +251,7 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
         final = clone(candidate).fit_prepared(record, len(record.t))
         table[name] = {"forecast_errors_percent_of_range": errors,
                        "forecast_median_percent_of_range": float(np.median(errors)),
+                       "forecast_worst_percent_of_range": float(np.max(errors)),
                        "terms": [term.name for term in final.terms_],
                        "sound": final.soundness_["sound"],
                        "active_constraints": final.soundness_["active_constraints"]}
@@ -272,13 +278,15 @@ def _with_smoothing(model, q, t):
         "wiggle_J": {f"{w}/{d}": v for (w, d), v in scores.items()}}
 
 
-#: procedures whose median forecast error is within this fraction of the best tie; the
+#: the score a procedure is chosen by (its largest forecast error over the origins)
+SCORE = "forecast_worst_percent_of_range"
+#: procedures whose score is within this fraction of the best tie; the
 #: first of them in the candidates' order (all data before windows, simpler fits first) wins
 TIE = 0.02
 
 
 def _choose(table: dict) -> str:
-    """The procedure of lowest median forecast error among those with a sound law (ties:
+    """The procedure of lowest ``SCORE`` among those with a sound law (ties:
     the first); :class:`~discrepancy.errors.ConvergenceError` if no law is sound."""
     sound = {name: row for name, row in table.items() if row["sound"]}
     if not sound:
@@ -286,9 +294,8 @@ def _choose(table: dict) -> str:
                                f"torque limit or the holding torque at a turning point): "
                                f"{sorted(table)[:3]}...; keep torque_limit='auto' and "
                                "turning_points=True")
-    best = min(row["forecast_median_percent_of_range"] for row in sound.values())
-    return next(name for name, row in sound.items()
-                if row["forecast_median_percent_of_range"] <= best * (1 + TIE))
+    best = min(row[SCORE] for row in sound.values())
+    return next(name for name, row in sound.items() if row[SCORE] <= best * (1 + TIE))
 
 
 def _progress(items, progress):
