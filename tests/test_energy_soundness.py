@@ -158,3 +158,17 @@ def test_static_friction_stays_below_the_gravity_torque_at_every_turning_point(s
     unsound = dc.DissipationDiscrepancy(system.energy, max_terms=2, turning_points=False,
                                         torque_limit=None).fit_prepared(record, len(t))
     assert not unsound.soundness_["sound"]
+
+
+def test_an_energy_not_quadratic_in_the_rates_has_no_turning_point_constraint():
+    """H = q^2/2 + dq^4/4 is no mechanical energy: no holding torque, so no constraint at
+    its turning points (the whole-law bound still applies)."""
+    t = np.arange(4000) * 0.005
+    q, dq = np.cos(t)[:, None], -np.sin(t)[:, None]
+    quartic = lambda x: x[:, 0] ** 2 / 2 + x[:, 1] ** 4 / 4          # noqa: E731
+    model = dc.DissipationDiscrepancy(quartic)
+    record = model.prepare(np.hstack([q, dq]), t)
+    assert len(turning_points(dq[:, 0])) > 5
+    assert all(len(record.turns(len(t), a)[0]) == 0 for a in range(len(record.axes)))
+    assert not any("turning" in kind for kind in record.limits(len(t)).kinds)
+    assert any("whole law" in kind for kind in record.limits(len(t)).kinds)

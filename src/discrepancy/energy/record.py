@@ -19,6 +19,7 @@ from .soundness import (
     envelope_rows,
     holding_torques,
     joint_axes,
+    kinetic_is_quadratic,
     per_unit_torques,
     turning_points,
 )
@@ -70,11 +71,13 @@ class PreparedRecording:
         return largest if largest > 0 else np.inf
 
     def turns(self, stop: int, axis: int) -> tuple[np.ndarray, np.ndarray]:
-        """Turning points of joint ``axis`` in ``[0, stop)`` and their holding torques (N m)."""
+        """Turning points of joint ``axis`` in ``[0, stop)`` and their holding torques (N m);
+        none when the joint speed is not linear in the rates or the energy's kinetic part is
+        not quadratic in them (no mechanical holding torque exists to compare with)."""
         direction = self.axes[axis].direction
-        if direction is None:
-            return np.zeros(0, dtype=int), np.zeros(0)
         index = turning_points(self.speeds[axis][:stop])
+        if direction is None or not kinetic_is_quadratic(self.energy, self.x[index]):
+            return np.zeros(0, dtype=int), np.zeros(0)   # no holding torque to compare with
         cache = self._holding.setdefault(axis, {})
         new = [i for i in index if i not in cache]
         if new:

@@ -163,6 +163,19 @@ def mass_matrix(energy, q: np.ndarray) -> np.ndarray:
     return out
 
 
+def kinetic_is_quadratic(energy, x: np.ndarray) -> bool:
+    """Whether ``H(q, dq) - H(q, 0)`` at states ``x`` ``(m, 2k)`` is quadratic in ``dq`` (a
+    mechanical kinetic energy), which :func:`holding_torques` needs."""
+    if len(x) == 0:
+        return True
+    k = x.shape[1] // 2
+    double = x.copy()
+    double[:, k:] *= 2
+    single = _kinetic_and_potential(energy, x)[0]
+    return bool(np.allclose(_kinetic_and_potential(energy, double)[0], 4 * single,
+                            rtol=1e-6, atol=1e-9 * max(float(np.max(np.abs(single))), 1e-300)))
+
+
 def holding_torques(energy, x: np.ndarray, direction: np.ndarray) -> np.ndarray:
     """``|lambda|`` ``(m,)`` (N m): the torque a joint of speed ``direction . dq`` must exert
     to stay at rest at states ``x`` ``(m, 2k)`` while the other joints move freely under the

@@ -20,9 +20,10 @@ def library_blind(pend: DoublePendulum, rec, n_origins: int) -> BlindFit:
                      n_origins=n_origins, progress=False)
 
 
-def library_summary(blind: BlindFit, rec) -> dict:
+def library_summary(blind: BlindFit, rec) -> tuple[dict, dict]:
     """Law, validation error (continued) and soundness, checked on the training part (the
-    fit's constraints) and, after the fact, on the whole recording."""
+    fit's constraints) and, after the fact, on the whole recording; and the curves
+    ``{"t", "delta_h", "model", "split"}`` for the figure."""
     model = blind.model
     x, t = model.states(rec.angles, rec.t)
     split = int(np.searchsorted(t, rec.split_time))
@@ -30,6 +31,7 @@ def library_summary(blind: BlindFit, rec) -> dict:
     record = model.prepare(x, t)
     whole = record.check(len(t), [record.terms.index(term) for term in model.terms_],
                          model.coef_)
+    curves = {"t": t, "delta_h": dh, "model": pred, "split": split}
     return {"chosen_procedure": blind.chosen, "smoothing": blind.smoothing,
             "equation": model.equation(), "identified_terms": model.identified_terms(),
             "terms": term_magnitudes(model, x[:split], t[:split]),
@@ -40,9 +42,10 @@ def library_summary(blind: BlindFit, rec) -> dict:
             "training": errors["training"],
             "soundness_on_training": blind.soundness,
             "soundness_on_whole_recording": whole,
-            "procedures": {name: {**row, "validation_continued_percent_of_range": continued_errors(
-                blind.models[name], x, t, split)[2]["validation_continued"][
-                "max_abs_percent_of_range"]} for name, row in blind.procedures.items()}}
+            "procedures": {name: {**row, "validation_continued_percent_of_range":
+                                  continued_errors(blind.models[name], x, t, split)[2][
+                                      "validation_continued"]["max_abs_percent_of_range"]}
+                           for name, row in blind.procedures.items()}}, curves
 
 
 def fit_start_index(model, t) -> int:

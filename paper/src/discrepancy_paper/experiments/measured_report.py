@@ -23,7 +23,7 @@ def _block_rates(t, curves, seconds=4.0):
     return np.array(centres), {k: np.array(v) for k, v in rates.items()}
 
 
-def experiment_report(rep, blind, default, pend, x, t, split, fitted, file_pred):
+def experiment_report(rep, blind, default, pend, x, t, split, fitted, file_pred, library):
     model = blind.model
     rep.text(f"80 s at 1 kHz; training 0-{rep.results['split_time_s']:.3f} s, validation after. "
              "Velocities from Savitzky-Golay on the raw angles. Errors: max |dH - model| in % "
@@ -31,7 +31,7 @@ def experiment_report(rep, blind, default, pend, x, t, split, fitted, file_pred)
              "training fit from where its data begin (t = 0, or the start of a fit window) on "
              "(no validation value is used); 'restarted' anchors it "
              "at the measured dH where the validation window starts.")
-    _library_section(rep)
+    _library_section(rep, library)
     _procedure_section(rep)
     _blind_section(rep)
     _model_section(rep, model, pend, x, t, split, fitted, file_pred)
@@ -39,8 +39,10 @@ def experiment_report(rep, blind, default, pend, x, t, split, fitted, file_pred)
     _state_form_text(rep, rep.results["state_form"])
 
 
-def _library_section(rep):
+def _library_section(rep, curves):
     """The lead: the library's own blind procedure, nothing chosen for this recording."""
+    from ..plots.energy import fit_figure
+
     lib = rep.results["library_blind_procedure"]
     smoothing = lib["smoothing"] or {}
     sound = lib["soundness_on_training"]
@@ -66,6 +68,15 @@ def _library_section(rep):
              f"{', '.join(sound.get('active_constraints', [])) or 'none'}.")
     rep.table(["data", "joint", "largest whole-law torque (N m)", "limit (N m)",
                "turning points", "largest torque at a turning point / holding torque"], rows)
+    k = curves["split"]
+    panels = [{"t": curves["t"][part], "delta_h": curves["delta_h"][part],
+               "model": curves["model"][part], "label": label,
+               "error": percent_error(curves["delta_h"][part], curves["model"][part],
+                                      normaliser="range"),
+               "error_label": "error (% of the window's dH range)"}
+              for label, part in (("training", slice(0, k)), ("validation", slice(k, None)))]
+    rep.figure(fit_figure(panels, title=lib["equation"]), "library_blind_fit.png",
+               "The library's blind law, continued from its training fit through validation")
     rep.text("The sections below keep the comparison this recording was developed on, "
              "including choices made after its validation numbers were seen (listed).")
 

@@ -131,7 +131,8 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
     pend = DoublePendulum(params)
     rep = Report(out_dir, "pendulum-energy-experiment", title="Energy lost to friction: measured "
                  "double pendulum (MultiArm-Pendulum rig, cart locked)")
-    library = library_summary(library_blind(pend, rec, 2 if quick else N_ORIGINS), rec)
+    library, library_curves = library_summary(library_blind(pend, rec,
+                                                            2 if quick else N_ORIGINS), rec)
     x, t = dissipation_model(pend, differentiation_method=_smoother()).states(rec.angles, rec.t)
     split = int(np.searchsorted(t, rec.split_time))
     blind = blind_comparison(pend, rec, 2 if quick else N_ORIGINS)
@@ -171,7 +172,8 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
     rep.results["state_form"] = _state_form(
         pend.energy, rec.angles[:rec.split_index], rec.t[:rec.split_index],
         {"validation (continued recording, same E0)": (rec.angles, rec.t)}, REAL_SMOOTHING)
-    experiment_report(rep, blind, default, pend, x, t, split, (dh, pred, band), file_pred)
+    experiment_report(rep, blind, default, pend, x, t, split, (dh, pred, band), file_pred,
+                      library_curves)
     return rep.write()
 
 
