@@ -38,3 +38,18 @@ def test_energy_systems_quick(tmp_path):
     assert ratio == pytest.approx(law["Coulomb joint 1"] / gravity.min(), rel=0.05)
     assert results["default_recordings"]["summary"]["within_bar"] == 1
     assert (out / "blind_validation.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_true_friction_of_a_chain_meets_the_turning_point_constraint():
+    """The simulated two-link chain swings through every detected turning point, so its true
+    break-away torque must lie below the holding torque there: the constraint the fit obeys
+    admits the true law (at single samples, without the slow passage, it did not)."""
+    from discrepancy.energy import DissipationDiscrepancy
+
+    rec = energy_recordings.simulate(2, "Stribeck", 0)
+    record = DissipationDiscrepancy.from_system(rec.model).prepare(rec.x, rec.t)
+    for joint, static in enumerate(rec.static_friction()):
+        index, holding = record.turns(len(rec.t), joint)
+        assert len(index) > 20
+        assert np.all(static < holding)

@@ -21,11 +21,13 @@ from .soundness import (
     joint_axes,
     kinetic_is_quadratic,
     per_unit_torques,
-    turning_points,
+    reversals,
 )
 
 #: turning points kept as single constraints (the lowest holding torques); the rest merged
 SINGLE_TURNS = 32
+#: samples of a reversal's slow passage at which the holding torque is evaluated
+PASSAGE_SAMPLES = 9
 
 
 class PreparedRecording:
@@ -71,19 +73,24 @@ class PreparedRecording:
         return largest if largest > 0 else np.inf
 
     def turns(self, stop: int, axis: int) -> tuple[np.ndarray, np.ndarray]:
-        """Turning points of joint ``axis`` in ``[0, stop)`` and their holding torques (N m);
-        none when the joint speed is not linear in the rates or the energy's kinetic part is
-        not quadratic in them (no mechanical holding torque exists to compare with)."""
+        """Turning points of joint ``axis`` in ``[0, stop)`` and their holding torques (N m):
+        the largest over the reversal's passage through slow speeds, since a joint that
+        sticks for a moment while the other links move breaks free once the torque holding
+        it exceeds its static friction. None when the joint speed is not linear in the rates
+        or the energy's kinetic part is not quadratic in them (no mechanical holding torque
+        exists to compare with)."""
         direction = self.axes[axis].direction
-        index = turning_points(self.speeds[axis][:stop])
+        index, first, last = reversals(self.speeds[axis][:stop])
         if direction is None or not kinetic_is_quadratic(self.energy, self.x[index]):
             return np.zeros(0, dtype=int), np.zeros(0)   # no holding torque to compare with
         cache = self._holding.setdefault(axis, {})
-        new = [i for i in index if i not in cache]
+        passages = [np.unique(np.linspace(a, b, min(b - a + 1, PASSAGE_SAMPLES)).round()
+                              .astype(int)) for a, b in zip(first, last, strict=True)]
+        new = sorted({int(i) for p in passages for i in p} - set(cache))
         if new:
             cache.update(zip(new, holding_torques(self.energy, self.x[new], direction),
                              strict=True))
-        return index, np.array([cache[i] for i in index])
+        return index, np.array([max(cache[int(i)] for i in p) for p in passages])
 
     def limits(self, stop: int, torque_limit="auto", at_turns: bool = True) -> Limits:
         """Soundness constraints (:class:`~discrepancy.energy.soundness.Limits`, over every

@@ -118,22 +118,30 @@ def turning_points(speed: np.ndarray) -> np.ndarray:
     ``MAX_DWELL`` of the median time between reversals (a longer dwell may be a stop, which
     says nothing against static friction). Each is the sample of smallest ``|speed|`` in
     between; noise around a joint at rest is no turning point."""
+    return reversals(speed)[0]
+
+
+def reversals(speed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`turning_points` with the first and last sample of each reversal's passage
+    through the band ``|speed| <= threshold``: ``(index, first, last)``, each ``(n,)``."""
+    none = (np.zeros(0, dtype=int),) * 3
     threshold = TURN_THRESHOLD * float(np.sqrt(np.mean(speed ** 2)))
     if threshold <= 0:
-        return np.zeros(0, dtype=int)
+        return none
     side = np.where(speed > threshold, 1, np.where(speed < -threshold, -1, 0))
     beyond = np.flatnonzero(side)
     if len(beyond) < 2:
-        return np.zeros(0, dtype=int)
+        return none
     flips = np.flatnonzero(side[beyond[1:]] != side[beyond[:-1]])
     left, right = beyond[flips], beyond[flips + 1]
     if len(left) == 0:
-        return np.zeros(0, dtype=int)
-    dwell = right - left
+        return none
     spacing = np.median(np.diff(left)) if len(left) > 2 else np.inf
-    keep = dwell <= max(MAX_DWELL * spacing, 2)
-    return np.array([a + int(np.argmin(np.abs(speed[a:b + 1]))) for a, b in
-                     zip(left[keep], right[keep], strict=True)], dtype=int)
+    keep = right - left <= max(MAX_DWELL * spacing, 2)
+    left, right = left[keep], right[keep]
+    index = np.array([a + int(np.argmin(np.abs(speed[a:b + 1])))
+                      for a, b in zip(left, right, strict=True)], dtype=int)
+    return index, left, right
 
 
 def _kinetic_and_potential(energy, x):
