@@ -130,10 +130,12 @@ class DissipationDiscrepancy(EnergyModel):
         k = x.shape[1] // 2
         return PreparedRecording(self._energy, x, t, self._terms(k), self.variable_names(k))
 
-    def fit_prepared(self, record: PreparedRecording, stop: int) -> DissipationDiscrepancy:
+    def fit_prepared(self, record: PreparedRecording, stop: int, *,
+                     check: bool = True) -> DissipationDiscrepancy:
         """Fit on the samples ``[0, stop)`` of a prepared recording (whose library must hold
         this model's terms), e.g. one shared by the procedures of
-        :func:`~discrepancy.energy.blind_fit`."""
+        :func:`~discrepancy.energy.blind_fit`; ``check=False`` skips ``soundness_`` (the
+        constraints hold the law anyway; the check reports on it)."""
         self._validate_params()
         k = record.x.shape[1] // 2
         terms = self._terms(k)
@@ -145,16 +147,19 @@ class DissipationDiscrepancy(EnergyModel):
         self.torque_limit_ = record.torque_limit(stop, self.torque_limit)
         limits = record.limits(stop, self.torque_limit, self.turning_points).restricted(columns)
         rows = slice(start, stop)       # integrals and dH restart where the fitted data begin
+        block = self._block(record.t[rows])
         self.fit_ = fit_dissipation(
             record.features[rows][:, columns] - record.features[start, columns],
-            record.delta_h[rows] - record.delta_h[start], terms,
-            block=self._block(record.t[rows]), max_terms=min(self.max_terms, len(terms)),
-            holdout=self.holdout, tolerance=self.tolerance, limits=limits)
+            record.delta_h[rows] - record.delta_h[start], terms, block=block,
+            max_terms=min(self.max_terms, len(terms)), holdout=self.holdout,
+            tolerance=self.tolerance, limits=limits,
+            statistics_of=lambda n: record.statistics(start, start + n, block, columns))
         self.terms_, self.coef_, self.offset_ = self.fit_.terms, self.fit_.coefficients, \
             self.fit_.offset
-        chosen = [columns[terms.index(term)] for term in self.terms_]
-        self.soundness_ = {**record.check(stop, chosen, self.coef_),
-                           "active_constraints": list(self.fit_.active)}
+        if check:
+            chosen = [columns[terms.index(term)] for term in self.terms_]
+            self.soundness_ = {**record.check(stop, chosen, self.coef_),
+                               "active_constraints": list(self.fit_.active)}
         return self
 
     def anchored(self, x, t) -> tuple[np.ndarray, np.ndarray]:

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..symbolic import compile_numpy
 from .dissipation import integrated_powers
+from .regression import Statistics, statistics
 from .soundness import (
     STATIC_MARGIN,
     Limits,
@@ -55,6 +56,19 @@ class PreparedRecording:
             np.max(np.abs(conservative_torques(energy, x)), axis=1))
         self._holding: dict = {}
         self._limits: dict = {}
+        self._turns: dict = {}
+        self._statistics: dict = {}
+
+    def statistics(self, start: int, stop: int, block: int | None, columns) -> Statistics:
+        """Statistics (:mod:`.regression`) of the fit on ``[start, stop)`` of the terms
+        ``columns``, with integrals and dH restarting at ``start``; each range is reduced
+        once for every term and shared by all procedures that fit it."""
+        key = (start, stop, block)
+        if key not in self._statistics:
+            self._statistics[key] = statistics(self.features[start:stop],
+                                               self.delta_h[start:stop], block)
+        return self._statistics[key].restricted(columns, shift_y=self.delta_h[start],
+                                                shift_f=self.features[start, columns])
 
     def window_start(self, stop: int, seconds: float | None) -> int:
         """First sample of the last ``seconds`` before ``stop`` (0 for ``None``)."""
@@ -79,6 +93,11 @@ class PreparedRecording:
         it exceeds its static friction. None when the joint speed is not linear in the rates
         or the energy's kinetic part is not quadratic in them (no mechanical holding torque
         exists to compare with)."""
+        if (stop, axis) not in self._turns:
+            self._turns[stop, axis] = self._find_turns(stop, axis)
+        return self._turns[stop, axis]
+
+    def _find_turns(self, stop: int, axis: int) -> tuple[np.ndarray, np.ndarray]:
         direction = self.axes[axis].direction
         index, first, last = reversals(self.speeds[axis][:stop])
         if direction is None or not kinetic_is_quadratic(self.energy, self.x[index]):

@@ -111,6 +111,14 @@ class Statistics:
     def offset(self, subset, xi) -> float:
         return float(self.mean_y - self.mean_f[list(subset)] @ xi)
 
+    def restricted(self, columns, *, shift_y: float = 0.0, shift_f=0.0) -> Statistics:
+        """The statistics of the columns ``columns`` only, with the target and features
+        shifted by constants (``y - shift_y``, ``F - shift_f``: a window's restart), which
+        change only the means."""
+        c = list(columns)
+        return Statistics(self.gram[np.ix_(c, c)], self.rhs[c], self.yy, self.mean_y - shift_y,
+                          self.mean_f[c] - shift_f)
+
 
 def cumulative_statistics(features: np.ndarray, target: np.ndarray) -> Statistics:
     """Least squares on the cumulative curves ``target ~ c + features @ xi``."""

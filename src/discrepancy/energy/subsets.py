@@ -59,7 +59,7 @@ def candidate_supports(stats, p: int, max_terms: int, limits=None) -> list[tuple
 
 def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 4,
                  holdout: float = 0.0, tolerance: float = 0.02, block: int | None = None,
-                 limits=None) -> tuple[tuple[int, ...], list]:
+                 limits=None, statistics_of=None) -> tuple[tuple[int, ...], list]:
     """Best non-negative, sound support of at most ``max_terms`` columns.
 
     Score of a support: with ``holdout = 0`` the RMS training error (J) after a moving
@@ -73,7 +73,8 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     elbow rule: the cumulative features are strongly correlated, so noise alone lowers the
     error a little with every term). ``block`` chooses the fit (:mod:`.regression`);
     ``limits`` (:class:`~discrepancy.energy.soundness.Limits` of all columns) are
-    constraints of every fit.
+    constraints of every fit; ``statistics_of(n)``, when given, returns the statistics of
+    the first ``n`` samples (shared between procedures; default: computed here).
 
     Returns ``(support, candidates)`` with ``candidates`` the sorted ``(score, support)``
     list; ``support`` is empty when no law fits with positive coefficients.
@@ -85,7 +86,8 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     if not 0 <= holdout < 0.9:
         raise ParameterError(f"holdout must be a fraction in [0, 0.9); got {holdout}")
     cut = int(round(m * (1 - holdout)))
-    stats = statistics(features[:cut], delta_h[:cut], block)
+    stats = statistics(features[:cut], delta_h[:cut], block) if statistics_of is None else \
+        statistics_of(cut)
     smooth = max(1, m // 100)
     candidates = []
     for subset in candidate_supports(stats, p, max_terms, limits):
@@ -140,7 +142,9 @@ def fit_dissipation(features: np.ndarray, delta_h: np.ndarray, terms, *, limits=
     """Select terms (:func:`select_terms`) and refit them on all samples under ``limits``;
     terms refitted to 0 are dropped."""
     support, candidates = select_terms(features, delta_h, limits=limits, **selection)
-    stats = statistics(features, delta_h, selection.get("block"))
+    of = selection.get("statistics_of")
+    stats = statistics(features, delta_h, selection.get("block")) if of is None else \
+        of(len(delta_h))
 
     def refit(subset):
         xi = stats.fit(subset, *_constraints(limits, subset))[0] if subset else np.zeros(0)
