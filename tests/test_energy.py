@@ -62,8 +62,8 @@ def test_integrated_powers_of_constant_speeds():
     t = np.linspace(0, 2, 201)
     v = np.tile([3.0, 1.0], (201, 1))     # joint 1 at 3 rad/s, joint 2 at 2 rad/s
     integral = integrated_powers(terms, v, t, SPEEDS)[-1]
-    expected = [9 * 2, 4 * 2, 3 * 2, 2 * 2, 27 * 2, 1 * 2,
-                3 * np.exp(-900) * 2, 2 * np.exp(-400) * 2]
+    stribeck = [w * np.exp(-(w / v) ** 2) * 2 for w in (3.0, 2.0) for v in (0.1, 0.3, 1.0)]
+    expected = [9 * 2, 4 * 2, 3 * 2, 2 * 2, 27 * 2, 1 * 2, *stribeck]
     np.testing.assert_allclose(integral, expected, rtol=1e-12, atol=1e-300)
 
 

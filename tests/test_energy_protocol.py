@@ -73,9 +73,9 @@ def test_restricted_choice_and_bad_arguments(swing, blind):
     system, q, t, split = swing
     names = [n for n in blind.procedures if "no Stribeck" in n]
     sub = blind.restricted(names)
-    best = min(blind.procedures[n]["forecast_median_percent_of_range"] for n in names)
+    best = min(blind.procedures[n]["forecast_worst_percent_of_range"] for n in names)
     assert set(sub.procedures) == set(names)
-    assert blind.procedures[sub.chosen]["forecast_median_percent_of_range"] <= best * 1.02
+    assert blind.procedures[sub.chosen]["forecast_worst_percent_of_range"] <= best * 1.02
     with pytest.raises(ParameterError, match="unknown"):
         blind.restricted(["no such procedure"])
     model = dc.DissipationDiscrepancy(system.energy)
@@ -100,23 +100,39 @@ def test_default_procedures_vary_fit_selection_and_library(swing):
     windows = sorted({p["fit_window"] or 0.0 for p in params})
     assert windows == pytest.approx([0.0, 9.6, 16.0])    # all data, last 30 % and 50 %
     sizes = {len(p["friction_terms"]) for p in params}
-    assert sizes == {4, 3}      # viscous, Coulomb, air drag (+ Stribeck)
+    assert sizes == {6, 3}      # viscous, Coulomb, air drag (+ Stribeck at 3 speeds)
 
 
 def test_fit_window_fits_the_last_seconds_and_anchors_there(swing):
-    """A fit on the last 8 s equals a fit on those samples given alone; anchored() puts
-    model and dH at the window's start, where the law's prediction begins."""
+    """A fit on the last 8 s recovers the true friction from those seconds alone (a fit on
+    the first 8 s of the same swing would see 3 times the speeds); anchored() puts model and
+    dH at the window's start, where the law's prediction begins."""
     system, q, t, _ = swing
     windowed = dc.DissipationDiscrepancy(system.energy, fit_window=8.0).fit(q, t)
-    keep = t >= t[-1] - 8.0
-    alone = dc.DissipationDiscrepancy(system.energy).fit(q[keep], t[keep])
-    np.testing.assert_allclose(windowed.coef_, alone.coef_, rtol=1e-12)
-    assert windowed.fit_start_ == pytest.approx(alone.fit_start_)
+    laws = dict(zip([term.name for term in windowed.terms_], windowed.coef_, strict=True))
+    assert laws["viscous joint 1"] == pytest.approx(K, rel=0.05)
+    assert laws["Coulomb joint 1"] == pytest.approx(F, rel=0.05)
     x, times = windowed.states(q, t)
+    assert windowed.fit_start_ == pytest.approx(times[-1] - 8.0, abs=1e-3)
     dh, model = windowed.anchored(x, times)
     k = int(np.argmin(np.abs(times - windowed.fit_start_)))
     assert dh[k] == 0 and model[k] == pytest.approx(windowed.offset_)
     assert np.sqrt(np.mean((dh[k:] - model[k:]) ** 2)) < 0.01 * np.ptp(dh[k:])
+
+
+def test_origin_fits_share_the_recording_but_read_nothing_after_their_origin(swing):
+    """A procedure fitted from the shared prepared training part up to an origin equals the
+    same procedure fitted on the positions before that origin alone."""
+    system, q, t, split = swing
+    model = dc.DissipationDiscrepancy(system.energy, block_seconds=1.0, holdout=0.2)
+    record = model.prepare(*model.states(q[:split], t[:split]))
+    edge = 15                                  # the default smoother's half window
+    shared = dc.DissipationDiscrepancy(**model.get_params()).fit_prepared(record,
+                                                                          12000 - 2 * edge)
+    alone = dc.DissipationDiscrepancy(**model.get_params()).fit(q[:12000], t[:12000])
+    assert [term.name for term in shared.terms_] == [term.name for term in alone.terms_]
+    np.testing.assert_allclose(shared.coef_, alone.coef_, rtol=1e-9)
+    assert shared.offset_ == pytest.approx(alone.offset_, rel=1e-9)
 
 
 def test_from_system_takes_names_and_relative_joints_from_the_system():
@@ -133,3 +149,36 @@ def test_from_system_takes_names_and_relative_joints_from_the_system():
     assert model.max_terms == 2
     with pytest.raises(ParameterError, match="joints"):
         dc.DissipationDiscrepancy.from_system(dc.systems.VanDerPol())
+
+
+def test_blind_fit_never_returns_an_unsound_law():
+    """A heavily damped rod (viscous friction only): Coulomb friction alone can only carry its
+    loss with a break-away above the gravity torque at the late turning points. Unconstrained,
+    that law forecasts better than the constrained one, but it would have stopped the rod at
+    turning points it swung through, so the constrained procedure is chosen."""
+    q, w = sp.symbols("q dq")
+    rod = dc.systems.LagrangianSystem(M * L ** 2 / 6 * w ** 2, -M * G * L / 2 * sp.cos(q),
+                                      ["q"], dissipation=0.05 * w ** 2 / 2)
+    t = np.arange(15001) / 1000
+    x = rod.simulate([2.0, 0.0], t, rtol=1e-11, atol=1e-11)
+    coulomb = [term for term in dc.energy.default_friction_library(["dq1"])
+               if term.name.startswith("Coulomb")]
+    candidates = {
+        "Coulomb, unconstrained": dc.DissipationDiscrepancy(
+            rod.energy, friction_terms=coulomb, torque_limit=None, turning_points=False),
+        "Coulomb, sound": dc.DissipationDiscrepancy(rod.energy, friction_terms=coulomb)}
+    blind = blind_fit(candidates, x[:, :1], t, split=12000, dq=x[:, 1:], progress=False)
+    free, sound = (blind.procedures[n] for n in candidates)
+    assert not free["sound"] and sound["sound"]
+    assert free["forecast_worst_percent_of_range"] < sound["forecast_worst_percent_of_range"]
+    assert blind.chosen == "Coulomb, sound" and blind.soundness["sound"]
+    assert any("turning points" in kind for kind in sound["active_constraints"])
+    # the sound law's break-away is below m g l/2 |sin q| at every turning point in training
+    # where the rod still swings by more than 0.05 rad
+    turns = np.flatnonzero(np.sign(x[1:12000, 1]) != np.sign(x[:11999, 1]))
+    turns = turns[np.abs(x[turns, 0]) > 0.05]
+    lowest = M * G * L / 2 * np.min(np.abs(np.sin(x[turns, 0])))
+    assert blind.model.coef_[0] < lowest
+    with pytest.raises(dc.errors.ConvergenceError, match="no candidate procedure"):
+        blind_fit({"free": candidates["Coulomb, unconstrained"]}, x[:, :1], t, split=12000,
+                  dq=x[:, 1:], progress=False)

@@ -4,17 +4,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..constraints import Integral, Interval, Options, Predicate, Real
-from ..data.trajectory import as_2d, as_times
 from ..errors import ParameterError
 from ..symbolic import feature_name
 from .base import DIFFERENTIATION, ENERGY, NAMES, EnergyModel
-from .dissipation import (
-    FrictionTerm,
-    default_friction_library,
-    fit_dissipation,
-    integrated_powers,
-    torque_bounds,
-)
+from .dissipation import FrictionTerm, default_friction_library, integrated_powers
+from .record import PreparedRecording
+from .subsets import fit_dissipation
 from .uncertainty import DissipationUncertainty, bootstrap_dissipation, quantile_band
 
 TERMS = [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 and all(
@@ -43,16 +38,25 @@ class DissipationDiscrepancy(EnergyModel):
         holdout, tolerance: term selection (:func:`~discrepancy.energy.select_terms`).
         block_seconds: ``None``: least squares on the cumulative curve; a length (s): the
             energy lost per block of that length, with relative weights.
-        torque_limit: the largest torque (N m, or N for a linear coordinate) any friction
-            law may exert in the data, a constraint of the fit: ``"auto"`` (default) the
-            largest conservative torque ``|∂H_m(q, 0)/∂q|`` along the recording (a larger
-            static friction would hold the system at its turning points), a number, or
-            ``None`` for no bound. Mount losses and other terms without a joint speed are
-            not bounded.
+        torque_limit: the largest torque (N m, or N for a linear coordinate) the whole law
+            at a joint (the sum of its terms there) may exert at any sample, a constraint of
+            the fit: ``"auto"`` (default) the largest conservative torque
+            ``|∂H_m(q, 0)/∂q|`` along the recording, a number, or ``None`` for no bound.
+            Mount losses and other terms without a joint speed are not bounded.
+        turning_points: also constrain the law's torque at every turning point the
+            recording shows (a joint's speed changes sign) below the torque holding that
+            joint there (:mod:`~discrepancy.energy.soundness`): a larger static friction
+            would have stopped it.
         fit_window: fit on the last ``fit_window`` seconds of the data only (``None``: all
             of it): the regime a forecast continues, when a decay passes through regimes
-            that one law of a small library does not describe equally well. ``fit_start_``
-            records where the fitted data begin; :meth:`anchored` compares there.
+            that one law of a small library does not describe equally well. The
+            constraints still come from all the data. ``fit_start_`` records where the
+            fitted data begin; :meth:`anchored` compares there.
+
+    Fitted attributes: ``terms_``, ``coef_``, ``offset_``, ``fit_`` (with the constraints
+    that hold the law at its bound, ``fit_.active``), ``torque_limit_`` (N m) and
+    ``soundness_``: the law checked on all the data it was fitted from (per joint, its
+    largest torque over the limit and over the holding torque at the turning points).
     """
 
     _parameter_constraints = {
@@ -62,13 +66,15 @@ class DissipationDiscrepancy(EnergyModel):
         "tolerance": [Interval(Real, 0, 1)],
         "block_seconds": [None, Interval(Real, 0, None, closed="neither")],
         "torque_limit": [None, Options({"auto"}), Interval(Real, 0, None, closed="neither")],
+        "turning_points": [bool],
         "fit_window": [None, Interval(Real, 0, None, closed="neither")],
         "differentiation_method": DIFFERENTIATION, "position_names": NAMES}
 
     def __init__(self, energy=None, *, friction_terms=None, max_terms: int = 4,
                  holdout: float = 0.0, tolerance: float = 0.02, block_seconds: float | None = None,
-                 torque_limit="auto", fit_window: float | None = None,
-                 differentiation_method=None, position_names=None):
+                 torque_limit="auto", turning_points: bool = True,
+                 fit_window: float | None = None, differentiation_method=None,
+                 position_names=None):
         self.energy = energy
         self.friction_terms = friction_terms
         self.max_terms = max_terms
@@ -76,6 +82,7 @@ class DissipationDiscrepancy(EnergyModel):
         self.tolerance = tolerance
         self.block_seconds = block_seconds
         self.torque_limit = torque_limit
+        self.turning_points = turning_points
         self.fit_window = fit_window
         self.differentiation_method = differentiation_method
         self.position_names = position_names
@@ -111,35 +118,48 @@ class DissipationDiscrepancy(EnergyModel):
                                  f"the fit needs at least {MIN_BLOCKS} (use shorter blocks)")
         return block
 
-    def _window(self, q, t, dq):
-        """The last ``fit_window`` seconds of ``(q, t, dq)`` (all of them for ``None``)."""
-        q = as_2d("q", q, allow_1d=True)
-        t = as_times("t", t, len(q))
-        if self.fit_window is None:
-            return q, t, dq
-        keep = t >= t[-1] - self.fit_window
-        return q[keep], t[keep], None if dq is None else as_2d(
-            "dq", dq, n_rows=len(keep), n_cols=q.shape[1], allow_1d=True)[keep]
-
     def fit(self, q, t, *, dq=None) -> DissipationDiscrepancy:
         """Fit on one trajectory of positions ``q`` ``(m, k)`` at times ``t`` (s or a step)."""
         self._validate_params()
-        q, t, dq = self._window(q, t, dq)
         x, t = self.states(q, t, dq=dq)
-        self.fit_start_ = float(t[0])
+        return self.fit_prepared(self.prepare(x, t), len(t))
+
+    def prepare(self, x, t) -> PreparedRecording:
+        """The states ``x`` ``(m, 2k)`` at times ``t`` ready for fits of this model's library
+        (:class:`~discrepancy.energy.record.PreparedRecording`)."""
         k = x.shape[1] // 2
-        self.variable_names_ = self.variable_names(k)
+        return PreparedRecording(self._energy, x, t, self._terms(k), self.variable_names(k))
+
+    def fit_prepared(self, record: PreparedRecording, stop: int, *,
+                     check: bool = True) -> DissipationDiscrepancy:
+        """Fit on the samples ``[0, stop)`` of a prepared recording (whose library must hold
+        this model's terms), e.g. one shared by the procedures of
+        :func:`~discrepancy.energy.blind_fit`; ``check=False`` skips ``soundness_`` (the
+        constraints hold the law anyway; the check reports on it)."""
+        self._validate_params()
+        k = record.x.shape[1] // 2
         terms = self._terms(k)
-        delta_h = self.measured_delta_h(x)
-        self.e0_ = float(self._energy(x[:1])[0])
-        features = integrated_powers(terms, x, t, self.variable_names_)
-        self.torque_limit_ = self._torque_limit(x)
-        upper = torque_bounds(terms, x, self.variable_names_, self.torque_limit_)
-        self.fit_ = fit_dissipation(features, delta_h, terms, block=self._block(t),
-                                    max_terms=min(self.max_terms, len(terms)),
-                                    holdout=self.holdout, tolerance=self.tolerance, upper=upper)
+        columns = _columns(record.terms, terms)
+        start = record.window_start(stop, self.fit_window)
+        self.variable_names_ = self.variable_names(k)
+        self.fit_start_ = float(record.t[start])
+        self.e0_ = float(record.h0 - record.delta_h[start])
+        self.torque_limit_ = record.torque_limit(stop, self.torque_limit)
+        limits = record.limits(stop, self.torque_limit, self.turning_points).restricted(columns)
+        rows = slice(start, stop)       # integrals and dH restart where the fitted data begin
+        block = self._block(record.t[rows])
+        self.fit_ = fit_dissipation(
+            record.features[rows][:, columns] - record.features[start, columns],
+            record.delta_h[rows] - record.delta_h[start], terms, block=block,
+            max_terms=min(self.max_terms, len(terms)), holdout=self.holdout,
+            tolerance=self.tolerance, limits=limits,
+            statistics_of=lambda n: record.statistics(start, start + n, block, columns))
         self.terms_, self.coef_, self.offset_ = self.fit_.terms, self.fit_.coefficients, \
             self.fit_.offset
+        if check:
+            chosen = [columns[terms.index(term)] for term in self.terms_]
+            self.soundness_ = {**record.check(stop, chosen, self.coef_),
+                               "active_constraints": list(self.fit_.active)}
         return self
 
     def anchored(self, x, t) -> tuple[np.ndarray, np.ndarray]:
@@ -154,17 +174,6 @@ class DissipationDiscrepancy(EnergyModel):
         dh = self.measured_delta_h(x, e0=float(self._energy(x[k:k + 1])[0]))
         model = self._predict(x, t, 0.0)
         return dh, model - model[k] + self.offset_
-
-    def _torque_limit(self, x) -> float:
-        """The bound of every friction torque (N m): see ``torque_limit``; ``inf`` for none
-        (also when the model energy has no potential to compare with)."""
-        if self.torque_limit is None:
-            return np.inf
-        if self.torque_limit != "auto":
-            return float(self.torque_limit)
-        torques = conservative_torques(self._energy, x)
-        largest = float(np.max(np.abs(torques)))
-        return largest if largest > 0 else np.inf
 
     def _predict(self, x, t, start: float) -> np.ndarray:
         """``start + Σ ξ_j ∫ θ_j dt``: ``start = 0`` on a new trajectory (``dH(t0) = 0``),
@@ -183,13 +192,15 @@ class DissipationDiscrepancy(EnergyModel):
         if not isinstance(block_seconds, (int, float)) or not np.isfinite(block_seconds) or \
                 block_seconds <= 0:
             raise ParameterError(f"block_seconds must be > 0 s; got {block_seconds!r}")
-        q, t, dq = self._window(q, t, dq)
         x, t = self.states(q, t, dq=dq)
+        if self.fit_window is not None:
+            keep = t >= t[-1] - self.fit_window
+            x, t = x[keep], t[keep]
         dt = float(np.median(np.diff(t)))
         features = integrated_powers(self.terms_, x, t, self.variable_names_)
         return bootstrap_dissipation(
             features, self.measured_delta_h(x), self.coef_, self.offset_,
-            [term.name for term in self.terms_], fit_block=self._block(t), upper=self.fit_.upper,
+            [term.name for term in self.terms_], fit_block=self._block(t), limits=self.fit_.limits,
             n_resamples=n_resamples, samples_per_block=max(2, int(round(block_seconds / dt))),
             seed=seed)
 
@@ -231,18 +242,10 @@ class DissipationDiscrepancy(EnergyModel):
         return f"P_loss = {body or '0'}  (W)"
 
 
-def conservative_torques(energy, x, *, max_rows: int = 5000) -> np.ndarray:
-    """``-∂H(q, 0)/∂q`` ``(m', k)`` at (up to ``max_rows`` evenly spaced) states ``x = [q, dq]``
-    ``(m, 2k)``: the conservative torques, by central differences of the energy at rest (for a
-    mechanical energy ``T + V`` with ``T = 0`` at rest this is ``-∂V/∂q``)."""
-    k = x.shape[1] // 2
-    rest = x[::max(1, len(x) // max_rows)].copy()
-    rest[:, k:] = 0.0
-    torques = np.empty((len(rest), k))
-    for i in range(k):
-        h = 1e-6 * max(1.0, float(np.max(np.abs(rest[:, i]))))
-        up, down = rest.copy(), rest.copy()
-        up[:, i] += h
-        down[:, i] -= h
-        torques[:, i] = -(energy(up) - energy(down)) / (2 * h)
-    return torques
+def _columns(library, terms) -> list[int]:
+    """Indices of ``terms`` in ``library``."""
+    index = {term: i for i, term in enumerate(library)}
+    missing = [term.name for term in terms if term not in index]
+    if missing:
+        raise ParameterError(f"the prepared recording lacks the terms {missing}")
+    return [index[term] for term in terms]

@@ -18,7 +18,7 @@ import numpy as np
 from ..constraints import validate_params
 from ..errors import ParameterError
 from ..models.uncertainty import BOOTSTRAP_CONSTRAINTS, CoefficientUncertainty
-from .dissipation import block_weights, nonnegative_fit
+from .regression import block_weights, nonnegative_fit
 
 
 @dataclass(frozen=True)
@@ -53,13 +53,14 @@ def quantile_band(curves: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, 
 def bootstrap_dissipation(features: np.ndarray, delta_h: np.ndarray, coef: np.ndarray,
                           offset: float, names: list[str], *, samples_per_block: int,
                           fit_block: int | None = None, n_resamples: int = 200,
-                          seed: int = 0, upper: np.ndarray | None = None
+                          seed: int = 0, limits=None
                           ) -> DissipationUncertainty:
     """Bootstrap the coefficients ``coef`` ``(k,)`` of ``delta_h ~ offset + features @ coef``.
 
     ``features`` ``(m, k)`` are the selected terms' integrated powers, ``fit_block`` the fit's
     own block length (``None``: cumulative fit), ``samples_per_block`` the bootstrap block,
-    ``upper`` ``(k,)`` the fit's physical limits of the coefficients.
+    ``limits`` the fit's soundness constraints on these terms
+    (:class:`~discrepancy.energy.soundness.Limits`), kept by every resample.
     """
     from tqdm.auto import tqdm
 
@@ -81,7 +82,7 @@ def bootstrap_dissipation(features: np.ndarray, delta_h: np.ndarray, coef: np.nd
     for r in tqdm(range(n_resamples), desc="bootstrap", disable=None, leave=False):
         signs = np.repeat(rng.choice([-1.0, 1.0], n_blocks), samples_per_block)[:m]
         fitted = nonnegative_fit(features, model + signs * residual, fit_block, weights,
-                                 upper)
+                                 limits)
         offsets[r], samples[r, 0] = fitted[0], fitted[1:]
     return DissipationUncertainty(np.asarray(coef, float)[None, :].copy(), samples, ["dH"],
                                   list(names), samples_per_block, offsets)

@@ -118,33 +118,33 @@ def seeds_figure(seeds, k1_error, k2_error, val_error, *, title: str = ""):
 
 
 def forecast_figure(table, *, marked=(), bar: float | None = None, title: str = ""):
-    """Each procedure's median forecast error from the origins inside training (x) against
+    """Each procedure's largest forecast error from the origins inside training (x) against
     its validation error (y), both in % of the window's dH range, one colour per library
     (the text before the first comma of a procedure's name); ``marked`` procedures ringed.
 
     Args:
-        table: ``{procedure: {"forecast_median_percent_of_range": float,
+        table: ``{procedure: {"forecast_worst_percent_of_range": float,
             "validation_continued_percent_of_range": float}}``.
     """
     fig, ax = plt.subplots(figsize=(7, 4.6))
     libraries = list(dict.fromkeys(name.split(",")[0] for name in table))
     for i, library in enumerate(libraries):
         rows = [r for n, r in table.items() if n.split(",")[0] == library]
-        ax.plot([r["forecast_median_percent_of_range"] for r in rows],
+        ax.plot([r["forecast_worst_percent_of_range"] for r in rows],
                 [r["validation_continued_percent_of_range"] for r in rows], "o",
                 color=f"C{i}", ms=5, alpha=0.8, label=library)
     for name, label in marked:
         r = table[name]
-        ax.plot(r["forecast_median_percent_of_range"], r["validation_continued_percent_of_range"],
+        ax.plot(r["forecast_worst_percent_of_range"], r["validation_continued_percent_of_range"],
                 "o", ms=13, mfc="none", mec="k", mew=1.2)
-        ax.annotate(label, (r["forecast_median_percent_of_range"],
+        ax.annotate(label, (r["forecast_worst_percent_of_range"],
                             r["validation_continued_percent_of_range"]),
                     textcoords="offset points", xytext=(8, 6), fontsize=8)
     if bar is not None:
         ax.axhline(bar, color="k", ls=":", lw=1, label=f"{bar:g} % (target)")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("median forecast error from origins inside training (% of range)")
+    ax.set_xlabel("largest forecast error from origins inside training (% of range)")
     ax.set_ylabel("validation error, continued (% of range)")
     ax.legend(fontsize=8)
     ax.set_title(title, fontsize=9)
@@ -165,6 +165,34 @@ def dissipation_rate_figure(centres, measured, models, *, title: str = ""):
     axes[1].axhline(0, color="k", lw=0.5)
     for ax in axes:
         ax.set_xlabel("t (s)")
+        ax.legend(fontsize=7)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def soundness_figure(rows, *, bar: float | None = None, title: str = ""):
+    """Per recording: the blind law's validation error and the true law's (% of the window's
+    dH range), and the law's largest torque at a turning point over the gravity torque there
+    (a static friction above 1 would have stopped the joint)."""
+    fig, axes = plt.subplots(1, 2, figsize=(12, 3.8))
+    x = np.arange(len(rows))
+    axes[0].bar(x - 0.2, [r["validation_error_percent"] for r in rows], 0.4,
+                label="blind law")
+    axes[0].bar(x + 0.2, [r["validation_error_percent_true_law"] for r in rows], 0.4,
+                color="0.6", label="true law (measurement's own error)")
+    if bar is not None:
+        axes[0].axhline(bar, color="k", ls=":", lw=1, label=f"{bar:g} % (target)")
+    axes[0].set_ylabel("validation error (% of range)")
+    ratios = [max(r["max_static_torque_over_gravity_torque_at_turning_points"], 1e-6)
+              for r in rows]
+    axes[1].bar(x, ratios, 0.6, color=["tab:green" if v < 1 else "tab:red" for v in ratios])
+    axes[1].axhline(1.0, color="k", ls=":", lw=1, label="gravity torque (would stick)")
+    axes[1].set_yscale("log")
+    axes[1].set_ylabel("static torque / gravity torque")
+    for ax in axes:
+        ax.set_xticks(x, [r["recording"].replace(", seed", "\nseed") for r in rows],
+                      fontsize=6, rotation=60, ha="right")
         ax.legend(fontsize=7)
     fig.suptitle(title)
     fig.tight_layout()
