@@ -9,7 +9,7 @@ Quick start::
                                 differentiation_method=dc.SavitzkyGolay(window_length=21))
     model.fit(x, t=0.01).print()
 """
-from . import errors, io, metrics, systems
+from . import errors, io, metrics, selection, systems
 from ._version import __version__  # noqa: F401
 from .data.chunks import Chunk
 from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
@@ -28,7 +28,8 @@ from .differentiation import (
 from .energy import DissipationDiscrepancy, EnergyDiscrepancy
 from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
 from .models import Constraints, DiscrepancyModel, load_model
-from .optimizers import SR3, STLSQ, GramStatistics, Lasso
+from .optimizers import SR3, STLSQ, GramStatistics, Lasso, PriorOnly
+from .selection import choose_procedure
 
 __all__ = [
     "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "CustomLibrary", "Dequantised",
@@ -38,3 +39,4 @@ __all__ = [
     "TrendFiltered",
     "WeakForm", "ZarrSource", "errors", "io", "load_model", "metrics", "systems",
 ]
+__all__ += ["PriorOnly", "choose_procedure", "selection"]

@@ -92,6 +92,21 @@ class CoarseSamplingWarning(UserWarning):
     """The data have too few samples per period for the chosen differentiation method."""
 
 
+class SelectionWarning(UserWarning):
+    """A choice made from the data went against what was asked for or expected (e.g.
+    ``refine`` kept the coefficients it started from because the refit forecast worse)."""
+
+
+class PriorOnlyWarning(SelectionWarning):
+    """No correction beat the prior alone on held-out forecasts: the fit returned the prior
+    alone (``model.prior_only_`` is True)."""
+
+
+class ExtrapolationWarning(UserWarning):
+    """A fitted model was evaluated outside the region of states and inputs its terms were
+    fitted on (``model.region_``); the message names the variables and how far."""
+
+
 def describe(value) -> str:
     """Short description of a value for error messages: type and shape, never its content."""
     shape = getattr(value, "shape", None)

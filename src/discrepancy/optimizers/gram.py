@@ -37,6 +37,10 @@ class GramStatistics:
             GramStatistics), or ``None`` when not kept.
         segment: rows per contiguous segment of the fold assignment (row ``i`` of the data,
             counted over all trajectories in order, is in fold ``(i // segment) % n_folds``).
+        held_out: samples kept beside the sums by whoever feeds them (a model's fit keeps
+            forecast windows and the range of every variable there,
+            :class:`discrepancy.selection.held_out.HeldOutWindows`), or ``None``; merged by
+            ``+=``, never read by the solvers.
     """
 
     p: int
@@ -49,6 +53,7 @@ class GramStatistics:
     signal: np.ndarray = field(init=False)
     count: int = 0
     folds: list | None = field(init=False, default=None)
+    held_out: object | None = field(init=False, default=None)
 
     def __post_init__(self):
         sizes = {"p": self.p, "n": self.n, "n_folds": self.n_folds, "segment": self.segment}
@@ -118,6 +123,10 @@ class GramStatistics:
             raise ShapeError(f"cannot merge statistics of (p={other.p}, n={other.n}, "
                              f"{other.n_folds} folds of {other.segment} rows) into (p={self.p}, "
                              f"n={self.n}, {self.n_folds} folds of {self.segment} rows)")
+        if other.held_out is not None:
+            if self.held_out is None:
+                self.held_out = other.held_out.empty_like()
+            self.held_out.merge(other.held_out)
         if self.folds is not None:
             for mine, theirs in zip(self.folds, other.folds, strict=True):
                 mine += theirs

@@ -19,6 +19,7 @@ EXPERIMENTS = {
     "noise-study": ("noise_study", "run"),
     "silverbox": ("silverbox", "run"),
     "cascaded-tanks": ("cascaded_tanks", "run"),
+    "blind-selection": ("blind_selection", "run"),
 }
 
 
