@@ -125,11 +125,13 @@ class OutputErrorMethods:
         """The prior alone by output error: only the initial states are estimated."""
         import copy
 
-        from .output_error import n_states_of, records_of
+        from ..data.trajectory import as_trajectories
+        from ..selection.output_checks import state_count
         from .output_fit import refit_outputs
 
-        _, r = records_of(self, y, t, u, substeps, u_hold)
-        setup = self.make_setup(n_states_of(self, x0), r)
+        first = as_trajectories(y, t, u, x_name="y")[0]
+        setup = self.make_setup(state_count(self, x0), 0 if first.u is None else
+                                first.u.shape[1])
         self._set_fit(setup, np.zeros((setup.n_states, setup.n_features)),
                       copy.deepcopy(setup.optimizer), None)
         coef, x0s, fit = refit_outputs(self, y, t, u, outputs=outputs, x0=x0,

@@ -23,9 +23,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..differentiation import WeakForm
 from ..optimizers.selection import one_standard_error
 from . import candidates as cands
-from .forecast import choose_steps, forecast_scores, prepare, refine_origins
+from .forecast import (
+    CAP,
+    choose_steps,
+    forecast_scores,
+    prepare,
+    refine_origins,
+    sensitive_leads,
+)
 
 #: fewest windows a choice by forecasts needs (fewer: the equation-error choice is kept)
 MIN_WINDOWS = 4
@@ -106,21 +114,39 @@ def select_by_forecasts(setup, stats, optimizer, held_out):
     windows = [] if held_out is None else held_out.complete()
     if len(windows) < MIN_WINDOWS or not stats.usable_folds():
         return None
-    origins = prepare(windows, setup)
-    n, p = setup.n_states, setup.n_features
+    derivatives = stats.signal / stats.count if stats.count else None
+    origins = prepare(windows, setup, mean_square_rate=None if setup.discrete_time
+                      or isinstance(setup.differentiation, WeakForm) else derivatives)
     everything = np.arange(origins.n_windows)
-    prior = forecast_scores(setup, origins, np.zeros((origins.n_windows, n, p)), everything,
-                            origins.max_steps)
-    steps = choose_steps(prior.lead)
+    coef, reference = _reference(setup, origins, optimizer)
+    origins = sensitive_leads(origins, reference)
+    reference.lead[np.isnan(origins.truth[:, :, 0])] = np.nan
+    steps = choose_steps(reference.lead)
     full = origins.steps_held() >= steps
     origins = origins.subset(full if full.sum() >= MIN_WINDOWS else everything, steps)
-    origins = refine_origins(setup, origins, min(steps, _local_steps(setup, origins)))
+    origins = refine_origins(setup, origins, min(steps, _local_steps(setup, origins)), coef)
     search = _Search(setup, stats, optimizer, origins)
     search.run()
     mean = search.scores.mean(axis=1)
     margin = np.maximum(search.standard_errors(), TOLERANCE * mean.min())
     k = one_standard_error(mean, margin, search.n_terms)
     return search.final_coefficients(k), search.result(k)
+
+
+def _reference(setup, origins, optimizer):
+    """``(coef, Scores)`` of the model the horizon and the origins are judged with: the
+    prior alone, or the equation-error choice when it forecasts the windows better (a prior
+    that diverges would leave no horizon at all)."""
+    W, n, p = origins.n_windows, setup.n_states, setup.n_features
+    everything = np.arange(W)
+    candidates = [np.zeros((n, p))]
+    if np.any(optimizer.coef_):
+        candidates.append(np.asarray(optimizer.coef_, dtype=float))
+    runs = [forecast_scores(setup, origins, np.repeat(c[None], W, axis=0), everything,
+                            origins.max_steps) for c in candidates]
+    errors = [np.nanmean(np.minimum(run.lead, CAP)) for run in runs]
+    k = int(np.argmin(errors))
+    return candidates[k], runs[k]
 
 
 def _local_steps(setup, origins) -> int:

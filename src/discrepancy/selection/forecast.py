@@ -76,15 +76,22 @@ class Origins:
                        stages, self.fold[keep], self.scale, self.centre, self.stride)
 
 
-def prepare(windows, setup) -> Origins:
+def prepare(windows, setup, *, mean_square_rate=None) -> Origins:
     """Origin states (the setup's smoothing at the origin, raw samples for maps and the weak
     form), the samples after them at the stride :func:`choose_stride` allows, padded to the
-    longest window."""
-    smoothed = [_smoothed(w, setup) for w in windows]
-    stride = choose_stride(windows, smoothed, setup)
+    longest window. ``mean_square_rate``: the mean squared derivative of each state over
+    the data (the statistics' ``signal / count``), for the stride; default from the
+    smoothing at the origins."""
+    smoothed = [_origin(w, setup) for w in windows]
+    x0 = np.array([state for state, _ in smoothed])
+    data = np.vstack([w.x[w.origin:] for w in windows])
+    spread = data.std(axis=0)
+    scale = np.where(spread > 0, spread, np.maximum(np.abs(data).max(axis=0), 1.0))
+    if mean_square_rate is None and all(d is not None for _, d in smoothed):
+        mean_square_rate = np.mean([d ** 2 for _, d in smoothed], axis=0)
+    stride = choose_stride(windows, setup, mean_square_rate, scale)
     n, r = setup.n_states, setup.n_inputs
     W, S = len(windows), max(w.lead for w in windows) // stride
-    x0 = np.array([xs[w.origin] for w, (xs, _) in zip(windows, smoothed, strict=True)])
     truth = np.full((W, S + 1, n), np.nan)
     h = np.zeros((W, S))
     stages = np.zeros((W, S, 3, r)) if r else None
@@ -95,9 +102,6 @@ def prepare(windows, setup) -> Origins:
         h[i, :k] = np.diff(w.t[at])
         if stages is not None:
             stages[i, :k] = _stage_inputs(w, at, stride, setup.discrete_time)
-    data = np.vstack([w.x[w.origin:] for w in windows])
-    spread = data.std(axis=0)
-    scale = np.where(spread > 0, spread, np.maximum(np.abs(data).max(axis=0), 1.0))
     return Origins(x0, truth, h, stages, np.array([w.fold for w in windows]), scale,
                    data.mean(axis=0), stride)
 
@@ -112,26 +116,31 @@ def _stage_inputs(window, at, stride, discrete):
     return np.stack([u[at[:-1]], um, u[at[1:]]], axis=1)
 
 
-def _smoothed(window, setup):
-    """``(states, derivatives or None)`` of a window as the fit's method estimates them."""
+def _origin(window, setup):
+    """``(state, derivative or None)`` at a window's origin as the fit's method estimates
+    them, from the samples within the method's reach of it (raw for maps, the weak form
+    and windows too short to smooth)."""
     from ..differentiation import WeakForm
 
-    if setup.discrete_time or isinstance(setup.differentiation, WeakForm) or \
-            len(window.t) < setup.differentiation.min_samples:
-        return window.x, None
-    return setup.differentiation(window.x, window.t)
+    raw = window.x[window.origin], None
+    method = setup.differentiation
+    if setup.discrete_time or isinstance(method, WeakForm):
+        return raw
+    reach = method.halo if method.halo is not None else window.origin
+    lo, hi = window.origin - min(reach, window.origin), window.origin + reach + 1
+    if hi - lo < method.min_samples or hi > window.filled:
+        return raw
+    xs, xd = method(window.x[lo:hi], window.t[lo:hi])
+    return xs[window.origin - lo], xd[window.origin - lo]
 
 
-def choose_stride(windows, smoothed, setup) -> int:
+def choose_stride(windows, setup, mean_square_rate, scale) -> int:
     """Samples per RK4 step: the largest power of two (at most :data:`MAX_STRIDE`) whose
     step times the data's fastest rate (RMS derivative over standard deviation, per state)
     stays below :data:`STEP_LIMIT`; 1 for maps and when no derivative is known."""
-    if setup.discrete_time or any(d is None for _, d in smoothed):
+    if setup.discrete_time or mean_square_rate is None:
         return 1
-    xs = np.vstack([s for s, _ in smoothed])
-    xd = np.vstack([d for _, d in smoothed])
-    spread = np.where(xs.std(axis=0) > 0, xs.std(axis=0), 1.0)
-    rate = float(np.max(np.sqrt(np.mean(xd ** 2, axis=0)) / spread))
+    rate = float(np.max(np.sqrt(np.asarray(mean_square_rate, float)) / scale))
     dt = float(np.median(np.concatenate([np.diff(w.t) for w in windows])))
     stride = 1
     while stride < MAX_STRIDE and 2 * stride * dt * rate <= STEP_LIMIT:
@@ -153,12 +162,12 @@ class BatchModel:
         self.coef = np.ascontiguousarray(coef[:, :, used].transpose(0, 2, 1))   # (B, q, n)
 
     def __call__(self, x: np.ndarray, u: np.ndarray | None) -> np.ndarray:
+        """(Called inside ``np.errstate(all="ignore")``: a wild row is caught afterwards.)"""
         out = self.setup.prior.unchecked(x, u)
         if self.terms:
             z = x if u is None else np.hstack([x, u])
-            with np.errstate(all="ignore"):
-                theta = np.column_stack([np.broadcast_to(f(z), len(z)) for f in self.terms])
-                out = out + np.einsum("bq,bqn->bn", theta, self.coef)
+            theta = np.column_stack([f(z) for f in self.terms])
+            out = out + np.einsum("bq,bqn->bn", theta, self.coef)
         return out
 
 
@@ -170,24 +179,26 @@ class Scores:
 
     score: np.ndarray
     lead: np.ndarray
+    gain: np.ndarray | None = None
 
 
 def forecast_scores(setup, origins: Origins, coef: np.ndarray, window: np.ndarray,
                     steps: int) -> Scores:
     """Forecasts of rows ``b`` from window ``window[b]`` with coefficients ``coef[b]``
     ``(n, p)`` for ``steps`` steps, scored with the initial state fitted (module doc)."""
-    score, lead, _ = _run(setup, origins, coef, window, steps, origins.x0[window])
-    return Scores(score, lead)
+    score, lead, _, gain = _run(setup, origins, coef, window, steps, origins.x0[window])
+    return Scores(score, lead, gain)
 
 
-def refine_origins(setup, origins: Origins, steps: int) -> Origins:
-    """The origins with the state the prior fits best over their first ``steps`` steps
-    (one Gauss-Newton step from the smoothed state): over a short stretch every sensible
-    model agrees with the prior, and the start is then close enough for one linear step
-    per candidate over the whole horizon."""
-    W, n, p = origins.n_windows, setup.n_states, setup.n_features
-    everything = np.arange(W)
-    _, _, delta = _run(setup, origins, np.zeros((W, n, p)), everything, steps, origins.x0)
+def refine_origins(setup, origins: Origins, steps: int, coef: np.ndarray) -> Origins:
+    """The origins with the state a reference model (``coef`` ``(n, p)``: the prior, or a
+    better-forecasting correction) fits best over their first ``steps`` steps (one
+    Gauss-Newton step from the smoothed state): over a short stretch every sensible model
+    agrees with it, and the start is then close enough for one linear step per candidate
+    over the whole horizon."""
+    everything = np.arange(origins.n_windows)
+    _, _, delta, _ = _run(setup, origins, np.repeat(coef[None], origins.n_windows, axis=0),
+                          everything, steps, origins.x0)
     return Origins(origins.x0 + delta, origins.truth, origins.h, origins.stages,
                    origins.fold, origins.scale, origins.centre, origins.stride)
 
@@ -201,6 +212,7 @@ def _run(setup, origins, coef, window, steps, x0):
     start = x0[group] + np.tile(np.vstack([np.zeros(n), np.diag(nudge)]), (B, 1))
     fit = _NormalEquations(B, n)
     lead = np.full((B, steps + 1), np.nan)
+    gain = np.full((B, steps + 1), np.nan)
     x, alive = start.copy(), np.ones(B, bool)
     with np.errstate(all="ignore"):
         for k in range(steps + 1):
@@ -217,13 +229,14 @@ def _run(setup, origins, coef, window, steps, x0):
             jacobian = (states[:, 1:] - states[:, :1]).transpose(0, 2, 1) / \
                 (nudge / origins.scale)[None, None, :] / origins.scale[None, :, None]
             lead[:, k] = np.where(alive, np.minimum(np.mean(error ** 2, axis=1), CAP), CAP)
+            gain[:, k] = np.sqrt(np.mean(jacobian ** 2, axis=(1, 2)) * n)
             fit.add(np.nan_to_num(error), np.nan_to_num(jacobian), held & alive)
     score, delta = fit.fitted_mean_square()
     seen = np.isfinite(lead)
     plain = np.where(seen, lead, 0).sum(axis=1) / np.maximum(seen.sum(axis=1), 1)
     score[~alive] = plain[~alive]
     delta[~alive] = 0.0
-    return score, lead, delta * origins.scale
+    return score, lead, delta * origins.scale, gain
 
 
 class _NormalEquations:
@@ -264,6 +277,25 @@ def _step(model, x, origins, window, k, discrete):
 SATURATION = 1.0
 #: shortest horizon (steps), when the windows are that long
 MIN_STEPS = 8
+
+
+#: a window's forecasts are scored until the prior's sensitivity to its initial state
+#: (RMS of the scaled Jacobian, 1 at the origin) reaches this: further on, a chaotic or
+#: unstable forecast depends more on its start than on the model
+GAIN_LIMIT = 20.0
+
+
+def sensitive_leads(origins: Origins, prior: Scores) -> Origins:
+    """The origins with each window's samples beyond the lead where the prior's sensitivity
+    reaches :data:`GAIN_LIMIT` dropped (NaN), so every candidate is scored on the same
+    leads."""
+    truth = origins.truth.copy()
+    for w, gain in enumerate(prior.gain):
+        over = np.flatnonzero(gain >= GAIN_LIMIT)
+        if over.size:
+            truth[w, max(int(over[0]), MIN_STEPS + 1):] = np.nan
+    return Origins(origins.x0, truth, origins.h, origins.stages, origins.fold,
+                   origins.scale, origins.centre, origins.stride)
 
 
 def choose_steps(prior_lead: np.ndarray) -> int:

@@ -23,6 +23,22 @@ from ..models.region import FittedRegion
 HOLDOUT = 0.25
 
 
+def state_count(model, x0=None) -> int:
+    """The number of states of a model about to be fitted by output error: its state names,
+    a sympy prior's length, or the initial state's."""
+    from ..errors import ParameterError
+
+    names, prior = model.state_names, model.prior
+    if names is not None:
+        return 1 if isinstance(names, str) else len(names)
+    if isinstance(prior, (list, tuple)):
+        return len(prior)
+    if x0 is not None:
+        return int(np.shape(x0)[-1])
+    raise ParameterError("the number of states is unknown: give state_names, a prior as a "
+                         "list of sympy expressions, or x0")
+
+
 def simulated_region(model, y, t, u, *, x0s, substeps: int, u_hold: str):
     """The range of the states along the model's simulation of every record (from its
     fitted initial states) and of the inputs: ``FittedRegion`` or None if it diverges."""

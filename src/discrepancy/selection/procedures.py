@@ -126,6 +126,7 @@ def _templates(model, candidates, records, outputs) -> dict:
     from ..models import DiscrepancyModel
     from ..models.setup import resolve_names
     from .candidate_libraries import default_libraries
+    from .output_checks import state_count
 
     if not isinstance(model, DiscrepancyModel) or hasattr(model, "coef_"):
         raise ParameterError(f"model must be an unfitted DiscrepancyModel; got "
@@ -133,7 +134,7 @@ def _templates(model, candidates, records, outputs) -> dict:
     if candidates is None:
         first = records[0]
         r = 0 if first.u is None else first.u.shape[1]
-        n = first.x.shape[1] if outputs is None else _n_states(model)
+        n = first.x.shape[1] if outputs is None else state_count(model)
         states = resolve_names("state_names", model.state_names, n, "x", one=None)
         inputs = resolve_names("input_names", model.input_names, r, "u", one="u")
         x, measured = _variables_with_data(records, states, outputs)
@@ -157,12 +158,6 @@ def _templates(model, candidates, records, outputs) -> dict:
 
 def _clone(model):
     return type(model)(**model.get_params(deep=False))
-
-
-def _n_states(model) -> int:
-    from ..models.output_error import n_states_of
-
-    return n_states_of(model, None)
 
 
 def _variables_with_data(records, states, outputs):
