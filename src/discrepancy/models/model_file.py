@@ -178,8 +178,8 @@ def _fit_record(fit, version: int) -> dict | None:
     keys = FIT_KEYS[version]
     if not (isinstance(fit, dict) and set(fit) == keys
             and (fit["n_samples"] is None or type(fit["n_samples"]) is int)):
-        raise _fail(f"fit must have exactly the keys {sorted(keys)} ('n_samples': an integer "
-                    "or null, the others objects or null)")
+        raise _fail(f"fit must be an object with exactly the keys {sorted(keys)} "
+                    "('n_samples': an integer or null, the others objects or null)")
     for key in keys - {"n_samples"}:
         value = fit[key]
         if value is not None and not (isinstance(value, dict) and _is_plain(value, 0)):

@@ -5,8 +5,9 @@ exact sympy library (so a chosen model exports like any other):
 
 * polynomials of degree 1, 2 and 3 in the states and inputs;
 * friction laws of each velocity-like state: viscous ``v``, smoothed Coulomb
-  ``tanh(v / ε)`` and a Stribeck bump ``exp(-(v / v_s)²) tanh(v / ε)``, with ``ε`` a tenth
-  and ``v_s`` the median of ``|v|`` over the data. A state is velocity-like when the prior's
+  ``tanh(v / ε)`` and a Stribeck bump ``exp(-(v / v_s)²) tanh(v / ε)``, with ``ε`` a
+  fiftieth and ``v_s`` the median of ``|v|`` over the data (a tenth smoothed a true Coulomb
+  law so much that hinges forecast it better). A state is velocity-like when the prior's
   equation of another state is that state (``(q)' = v``), which the prior's expressions or
   its values on the data show;
 * hinges ``max(0, z - k)`` with knots ``k`` at the 25, 50 and 75 % quantiles of every
@@ -72,7 +73,7 @@ def friction_library(velocities: dict[str, np.ndarray]) -> CustomLibrary | None:
         scale = float(np.median(speed)) if speed.size else 0.0
         if scale <= 0:
             continue
-        s, sharp = symbol(name), _number(10 / scale)       # 1 / ε and 1 / v_s², rounded
+        s, sharp = symbol(name), _number(50 / scale)       # 1 / ε and 1 / v_s², rounded
         coulomb = sp.tanh(sharp * s)
         terms += [coulomb, sp.exp(-_number(scale ** -2) * s ** 2) * coulomb]
     return CustomLibrary(terms) if terms else None

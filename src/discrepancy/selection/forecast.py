@@ -76,17 +76,19 @@ class Origins:
                        stages, self.fold[keep], self.scale, self.centre, self.stride)
 
 
-def prepare(windows, setup, *, mean_square_rate=None) -> Origins:
+def prepare(windows, setup, *, mean_square_rate=None, scale=None) -> Origins:
     """Origin states (the setup's smoothing at the origin, raw samples for maps and the weak
     form), the samples after them at the stride :func:`choose_stride` allows, padded to the
     longest window. ``mean_square_rate``: the mean squared derivative of each state over
     the data (the statistics' ``signal / count``), for the stride; default from the
-    smoothing at the origins."""
+    smoothing at the origins. ``scale``: each state's scale (default its standard
+    deviation over the windows)."""
     smoothed = [_origin(w, setup) for w in windows]
     x0 = np.array([state for state, _ in smoothed])
     data = np.vstack([w.x[w.origin:] for w in windows])
-    spread = data.std(axis=0)
-    scale = np.where(spread > 0, spread, np.maximum(np.abs(data).max(axis=0), 1.0))
+    if scale is None:
+        spread = data.std(axis=0)
+        scale = np.where(spread > 0, spread, np.maximum(np.abs(data).max(axis=0), 1.0))
     if mean_square_rate is None and all(d is not None for _, d in smoothed):
         mean_square_rate = np.mean([d ** 2 for _, d in smoothed], axis=0)
     stride = choose_stride(windows, setup, mean_square_rate, scale)

@@ -10,8 +10,9 @@ ties, and is fitted on all the data. Nothing but the data given is read, so a te
 kept apart stays unseen.
 
 Forecasts: with every state measured (``fit``), from the state at the origin over the
-horizon, scored as the model's own selection scores them (the initial state fitted to the
-window, :mod:`.forecast`); the horizon is where the prior's error saturates unless given.
+horizon (a quarter of the shortest record unless given), scored as the model's own
+selection scores them (the initial state fitted to the window, each window until the
+prior's sensitivity to its start saturates, :mod:`.forecast`).
 With outputs (``fit_outputs``), the fitted simulation continues past the origin and its
 outputs are scored to the end of each record (as the benchmarks score a model).
 """
@@ -77,8 +78,9 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
             The prior alone is always added (``"prior alone"``).
         outputs: what ``x`` measures (then every candidate is fitted by ``fit_outputs``).
         n_origins: forecast origins (at least 2), from half of every record on.
-        horizon: forecast length in samples (state fits; default: where the prior's
-            error saturates, at most a quarter of the shortest record).
+        horizon: forecast length in samples (state fits; default a quarter of the shortest
+            record; each window is scored until the prior's sensitivity to its initial state
+            says forecasts stop meaning anything, as in the model's own selection).
         fit_kws: further keyword arguments of ``fit`` or ``fit_outputs``.
     """
     from tqdm.auto import tqdm
@@ -179,10 +181,16 @@ def _variables_with_data(records, states, outputs):
 
 class _StateForecasts:
     """Fit on each record's first part; forecast from the state there (initial state
-    fitted to the window, as the model's own selection scores)."""
+    fitted to the window, as the model's own selection scores), every state scaled by its
+    standard deviation over all the data, each window scored until the prior's
+    sensitivity to its start reaches the selection's limit."""
 
     def __init__(self, records, fit_kws, horizon):
-        self.records, self.fit_kws, self.horizon, self.last = records, fit_kws, horizon, None
+        self.records, self.fit_kws, self.last = records, fit_kws, None
+        shortest = min(r.n_samples for r in records)
+        self.horizon = int(HORIZON_SHARE * shortest) if horizon is None else int(horizon)
+        x = np.vstack([r.x for r in records])
+        self.scale = np.where(x.std(axis=0) > 0, x.std(axis=0), 1.0)
 
     def fit(self, template, fraction):
         parts = [_head(r, fraction) for r in self.records]
@@ -194,37 +202,35 @@ class _StateForecasts:
     def score(self, template, fraction) -> float:
         import warnings
 
-        from .forecast import choose_steps, forecast_scores, prepare
-        from .held_out import Window
+        from .forecast import forecast_scores, prepare, sensitive_leads
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             self.last = model = self.fit(template, fraction)
         setup = model.setup_
-        pre = setup.new_held_out().pre
-        windows = []
+        origins = prepare(self._windows(setup, fraction), setup, scale=self.scale)
+        W, everything = origins.n_windows, np.arange(origins.n_windows)
+        coef = np.repeat(model.coef_[None], W, axis=0)
+        steps = max(1, min(self.horizon // origins.stride, origins.max_steps))
+        origins = origins.subset(everything, steps)
+        prior = forecast_scores(setup, origins, np.zeros_like(coef), everything, steps)
+        origins = sensitive_leads(origins, prior)
+        return float(np.mean(forecast_scores(setup, origins, coef, everything, steps).score))
+
+    def _windows(self, setup, fraction):
+        from .held_out import Window
+
+        pre, windows = setup.new_held_out().pre, []
         for rec in self.records:
             cut = int(round(rec.n_samples * fraction))
-            lo = max(0, cut - pre)
-            hi = rec.n_samples if self.horizon is None else min(rec.n_samples,
-                                                                 cut + self.horizon + 1)
+            lo, hi = max(0, cut - pre), min(rec.n_samples, cut + self.horizon + 1)
             window = Window(0, cut - lo, hi - lo)
             window.append(rec.t[lo:hi], rec.x[lo:hi], None if rec.u is None else rec.u[lo:hi])
             if window.lead >= 2:
                 windows.append(window)
         if not windows:
             raise DataError("the records are too short to forecast from the origins")
-        origins = prepare(windows, setup)
-        W = origins.n_windows
-        coef = np.repeat(model.coef_[None], W, axis=0)
-        if self.horizon is None:   # where the prior saturates, fixed at the first origin
-            prior = forecast_scores(setup, origins, np.zeros_like(coef), np.arange(W),
-                                    origins.max_steps)
-            self.horizon = choose_steps(prior.lead) * origins.stride
-        steps = max(1, min(self.horizon // origins.stride, origins.max_steps))
-        origins = origins.subset(np.arange(W), steps)
-        return float(np.mean(forecast_scores(setup, origins, coef, np.arange(W),
-                                             steps).score))
+        return windows
 
 
 class _OutputForecasts:

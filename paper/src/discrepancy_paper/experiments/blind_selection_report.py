@@ -77,7 +77,16 @@ def report_cases(rep, cases, definitions, seeds):
 
 
 def report_disturbance(rep, case):
-    """(c): k-step forecasts of the test record, in and out of the unmeasured push."""
+    """(c): k-step forecasts of the test record, in and out of the unmeasured push (the
+    guard's warning is reported once, from the experiment)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _report_disturbance(rep, case)
+
+
+def _report_disturbance(rep, case):
     import matplotlib.pyplot as plt
 
     from discrepancy.plots.selection import procedure_figure
