@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 import discrepancy as dc
-from discrepancy.selection.forecast import choose_steps, forecast_scores, prepare
+from discrepancy.selection.forecast import forecast_scores, prepare
 from discrepancy.selection.held_out import Window
+from discrepancy.selection.horizon import choose_steps
 
 
 def window(t, x, u=None, origin=0, fold=0):

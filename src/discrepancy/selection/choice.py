@@ -26,14 +26,8 @@ import numpy as np
 from ..differentiation import WeakForm
 from ..optimizers.selection import one_standard_error
 from . import candidates as cands
-from .forecast import (
-    CAP,
-    choose_steps,
-    forecast_scores,
-    prepare,
-    refine_origins,
-    sensitive_leads,
-)
+from .forecast import CAP, forecast_scores, prepare, refine_origins
+from .horizon import choose_steps, sensitive_leads
 
 #: fewest windows a choice by forecasts needs (fewer: the equation-error choice is kept)
 MIN_WINDOWS = 4

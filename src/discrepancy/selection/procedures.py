@@ -179,30 +179,41 @@ def _variables_with_data(records, states, outputs):
     return x, measured
 
 
-class _StateForecasts:
-    """Fit on each record's first part; forecast from the state there (initial state
-    fitted to the window, as the model's own selection scores), every state scaled by its
-    standard deviation over all the data, each window scored until the prior's
-    sensitivity to its start reaches the selection's limit."""
+class _Judge:
+    """Fits a candidate on each record's first part (``fraction``); every measured signal
+    scaled by its standard deviation over all the data."""
 
-    def __init__(self, records, fit_kws, horizon):
+    horizon = None
+
+    def __init__(self, records, fit_kws):
         self.records, self.fit_kws, self.last = records, fit_kws, None
-        shortest = min(r.n_samples for r in records)
-        self.horizon = int(HORIZON_SHARE * shortest) if horizon is None else int(horizon)
-        x = np.vstack([r.x for r in records])
-        self.scale = np.where(x.std(axis=0) > 0, x.std(axis=0), 1.0)
+        data = np.vstack([r.x for r in records])
+        self.scale = np.where(data.std(axis=0) > 0, data.std(axis=0), 1.0)
 
     def fit(self, template, fraction):
         parts = [_head(r, fraction) for r in self.records]
-        model = _clone(template)
-        return model.fit([p.x for p in parts], t=[p.t for p in parts],
-                         u=None if parts[0].u is None else [p.u for p in parts],
-                         **self.fit_kws)
+        u = None if parts[0].u is None else [p.u for p in parts]
+        return self._fit(_clone(template), [p.x for p in parts], [p.t for p in parts], u)
+
+
+class _StateForecasts(_Judge):
+    """Forecast from the state at the origin (initial state fitted to the window, as the
+    model's own selection scores), each window scored until the prior's sensitivity to
+    its start reaches the selection's limit."""
+
+    def __init__(self, records, fit_kws, horizon):
+        super().__init__(records, fit_kws)
+        shortest = min(r.n_samples for r in records)
+        self.horizon = int(HORIZON_SHARE * shortest) if horizon is None else int(horizon)
+
+    def _fit(self, model, x, t, u):
+        return model.fit(x, t=t, u=u, **self.fit_kws)
 
     def score(self, template, fraction) -> float:
         import warnings
 
-        from .forecast import forecast_scores, prepare, sensitive_leads
+        from .forecast import forecast_scores, prepare
+        from .horizon import sensitive_leads
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -233,23 +244,16 @@ class _StateForecasts:
         return windows
 
 
-class _OutputForecasts:
+class _OutputForecasts(_Judge):
     """Fit by output error on each record's first part; the fitted simulation continues to
     the record's end, its outputs scored after the origin."""
 
-    horizon = None
-
     def __init__(self, records, outputs, fit_kws):
-        self.records, self.outputs, self.fit_kws, self.last = records, outputs, fit_kws, None
-        y = np.vstack([r.x for r in records])
-        self.scale = np.where(y.std(axis=0) > 0, y.std(axis=0), 1.0)
+        super().__init__(records, fit_kws)
+        self.outputs = outputs
 
-    def fit(self, template, fraction):
-        parts = [_head(r, fraction) for r in self.records]
-        model = _clone(template)
-        return model.fit_outputs([p.x for p in parts], t=[p.t for p in parts],
-                                 u=None if parts[0].u is None else [p.u for p in parts],
-                                 outputs=self.outputs, **self.fit_kws)
+    def _fit(self, model, y, t, u):
+        return model.fit_outputs(y, t=t, u=u, outputs=self.outputs, **self.fit_kws)
 
     def score(self, template, fraction) -> float:
         import warnings
