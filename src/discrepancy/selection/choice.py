@@ -52,7 +52,9 @@ class ForecastSelection:
         labels: ``"equation error"``, ``"prior alone"`` or ``""`` per candidate.
         chosen: index of the chosen candidate; prior_only: whether it has no terms.
         horizon: forecast length in samples; horizon_time: in time units (median over
-            windows); n_windows: forecast origins used.
+            windows); n_windows: forecast origins used; window_leads: the samples scored
+            after each origin (shorter than the horizon where the reference model's
+            sensitivity to its start saturates, :mod:`.horizon`).
         lead_rms: ``{"prior alone": (horizon,), "chosen": (horizon,)}``: RMS scaled error
             at each lead over the windows.
     """
@@ -68,6 +70,7 @@ class ForecastSelection:
     horizon_time: float = 0.0
     n_windows: int = 0
     lead_rms: dict = field(default_factory=dict, repr=False)
+    window_leads: list = field(default_factory=list, repr=False)
 
     @property
     def prior_only(self) -> bool:
@@ -249,4 +252,5 @@ class _Search:
             score=scores.mean(axis=1).tolist(), score_se=self.standard_errors().tolist(),
             labels=self.labels, window_scores=scores, chosen=k,
             horizon=int(self.steps * o.stride), horizon_time=float(np.median(times)),
-            n_windows=int(o.n_windows), lead_rms=lead_rms)
+            n_windows=int(o.n_windows), lead_rms=lead_rms,
+            window_leads=(o.steps_held() * o.stride).tolist())
