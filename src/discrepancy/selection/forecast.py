@@ -139,11 +139,20 @@ def _origin(window, setup):
 def choose_stride(windows, setup, mean_square_rate, scale) -> int:
     """Samples per RK4 step: the largest power of two (at most :data:`MAX_STRIDE`) whose
     step times the data's fastest rate (RMS derivative over standard deviation, per state)
-    stays below :data:`STEP_LIMIT`; 1 for maps and when no derivative is known."""
-    if setup.discrete_time or mean_square_rate is None:
+    stays below :data:`STEP_LIMIT`; 1 for maps. Without derivatives (the weak form) the
+    rate is that of the raw samples' changes over :data:`MAX_STRIDE` samples, which noise
+    only makes larger (a shorter step)."""
+    if setup.discrete_time:
         return 1
-    rate = float(np.max(np.sqrt(np.asarray(mean_square_rate, float)) / scale))
     dt = float(np.median(np.concatenate([np.diff(w.t) for w in windows])))
+    if mean_square_rate is None:
+        lag = MAX_STRIDE
+        changes = [w.x[lag:w.filled] - w.x[:w.filled - lag] for w in windows
+                   if w.filled > lag]
+        if not changes:
+            return 1
+        mean_square_rate = np.mean(np.vstack(changes) ** 2, axis=0) / (lag * dt) ** 2
+    rate = float(np.max(np.sqrt(np.asarray(mean_square_rate, float)) / scale))
     stride = 1
     while stride < MAX_STRIDE and 2 * stride * dt * rate <= STEP_LIMIT:
         stride *= 2
