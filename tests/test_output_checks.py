@@ -83,3 +83,18 @@ def test_refine_improves_coefficients_that_are_off():
     assert not start.refine_check_["kept_original"]
     names = start.get_feature_names()
     assert start.coef_[1, names.index("pos^3")] == pytest.approx(-0.5, rel=0.03)
+
+
+@pytest.mark.slow
+def test_libraries_chosen_by_output_forecasts_find_the_hidden_cubic_spring():
+    """Position measured only; the truth adds -0.1 vel - 0.5 pos^3 to the prior: among a
+    linear and a cubic library (and the prior alone), the cubic one forecasts best."""
+    u, x, y = record(0.2, 0.5)
+    candidates = {"linear": dc.PolynomialLibrary(1, variables=["pos", "vel"]),
+                  "cubic": dc.PolynomialLibrary(3, variables=["pos", "vel"])}
+    choice = dc.choose_procedure(model(), y, t=T, u=u, outputs=["pos"], candidates=candidates,
+                                 n_origins=2, fit_kws={"progress": False}, progress=False)
+    assert choice.chosen == "cubic"
+    assert choice.scores["prior alone"]["mean"] > 5 * choice.scores["cubic"]["mean"]
+    names = choice.model.get_feature_names()
+    assert choice.model.coef_[1, names.index("pos^3")] == pytest.approx(-0.5, rel=0.05)
