@@ -49,7 +49,7 @@ import test_adversarial_options
 
 TABLES = [test_adversarial_fit, test_adversarial_components, test_adversarial_models,
           test_adversarial_files, test_adversarial_cli, test_adversarial_energy_control,
-          test_adversarial_isolated, test_adversarial_estimation]
+          test_adversarial_isolated, test_adversarial_estimation, test_adversarial_options]
 
 
 def test_the_docstring_gives_the_number_of_distinct_rows_per_entry_point():

@@ -80,6 +80,7 @@ CASES = {
     "STLSQ auto": _optimizer_case(lambda: dc.STLSQ(threshold="auto")),
     "Lasso": _optimizer_case(lambda: dc.Lasso(alpha=1e-4, unbias=True)),
     "SR3": _optimizer_case(lambda: dc.SR3(reg_weight_lam=0.01)),
+    "PriorOnly": _optimizer_case(dc.PriorOnly),
     "FiniteDifference": _differentiator_case(dc.FiniteDifference),
     "SavitzkyGolay": _differentiator_case(lambda: dc.SavitzkyGolay(window_length=31)),
     "Spline": _differentiator_case(lambda: dc.Spline(s=1e-4)),

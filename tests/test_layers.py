@@ -59,11 +59,12 @@ def test_no_import_cycles():
 
 def test_lower_layers_never_import_higher_ones():
     order = ["errors", "constraints", "base", "registry", "symbolic", "data", "differentiation",
-             "libraries", "optimizers", "accumulate", "models", "streaming", "distributed",
-             "estimation", "energy", "systems", "control", "plots", "cli"]
+             "libraries", "optimizers", "accumulate", "models", "selection", "streaming",
+             "distributed", "estimation", "energy", "systems", "control", "plots", "cli"]
     rank = {name: i for i, name in enumerate(order)}
     allowed_up = {("models", "streaming"), ("models", "distributed"),   # fit dispatches to them
-                  ("models", "estimation")}           # and fit_prediction_error to estimation
+                  ("models", "estimation"),           # and fit_prediction_error to estimation
+                  ("models", "selection")}   # and chooses terms by forecasts there
     for module, targets in graph().items():
         layer = module.split(".")[1] if "." in module else None
         for target in targets:

@@ -9,7 +9,7 @@ Quick start::
                                 differentiation_method=dc.SavitzkyGolay(window_length=21))
     model.fit(x, t=0.01).print()
 """
-from . import errors, estimation, io, metrics, systems
+from . import errors, estimation, io, metrics, selection, systems
 from ._version import __version__  # noqa: F401
 from .data.chunks import Chunk
 from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
@@ -36,14 +36,16 @@ from .optimizers import (
     GramStatistics,
     Lasso,
     LinearConstraints,
+    PriorOnly,
 )
+from .selection import choose_procedure
 
 __all__ = [
-    "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "CustomLibrary", "Dequantised",
-    "DiscrepancyModel", "DissipationDiscrepancy", "EnergyDiscrepancy", "FiniteDifference",
-    "FourierLibrary", "GramStatistics", "HDF5Source", "Kalman", "Lasso", "NPZFiles",
-    "PolynomialLibrary", "SR3", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline",
-    "TrendFiltered",
-    "WeakForm", "ZarrSource", "errors", "estimation", "io", "load_model", "metrics", "systems",
-    "ConstrainedSR3", "EnsembleOptimizer", "LinearConstraints",
+    "AutoSmoothing", "CSVFiles", "Chunk", "ConstrainedSR3", "Constraints", "CustomLibrary",
+    "Dequantised", "DiscrepancyModel", "DissipationDiscrepancy", "EnergyDiscrepancy",
+    "EnsembleOptimizer", "FiniteDifference", "FourierLibrary", "GramStatistics", "HDF5Source",
+    "Kalman", "Lasso", "LinearConstraints", "NPZFiles", "PolynomialLibrary", "PriorOnly", "SR3",
+    "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline", "TrendFiltered", "WeakForm",
+    "ZarrSource", "choose_procedure", "errors", "estimation", "io", "load_model", "metrics",
+    "selection", "systems"
 ]

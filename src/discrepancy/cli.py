@@ -121,7 +121,8 @@ def cmd_fit(args) -> None:
         prior=_load_callable(args.prior) if args.prior else None,
         feature_library=args.library, optimizer=args.optimizer,
         differentiation_method=args.differentiation,
-        state_names=data.state_names, input_names=data.input_names or None)
+        state_names=data.state_names, input_names=data.input_names or None,
+        selection=args.selection)
     if args.dt is not None and (not np.isfinite(args.dt) or args.dt <= 0):
         raise ParameterError(f"--dt must be a positive time step; got {args.dt}")
     if args.dt is not None and data.t is not None:
@@ -250,6 +251,10 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--differentiation", default=None,
                    help='e.g. "savitzky_golay(window_length=31, polyorder=3)" or "spline(s=0.01)" '
                    "(default: the library's)")
+    f.add_argument("--selection", default="auto", choices=["auto", "forecast", "optimizer"],
+                   help="how terms are chosen: auto (default: by forecasts, the prior alone "
+                   "included, when the optimizer chooses its own sparsity), forecast, or "
+                   "optimizer (its own equation-error choice)")
     f.add_argument("--out", default="model.json")
     f.set_defaults(func=cmd_fit)
     s = sub.add_parser("simulate", help="simulate a saved model")

@@ -158,8 +158,44 @@ def dask_statistics(model, x, *, t=None, u=None, x_dot=None):
         graphs.append(_trajectory_graph(setup, xk, _as_dask("u", uk, xk, r or None),
                                         _as_dask("x_dot", xdk, xk, n), step, k, offset))
         offset += xk.shape[0]
-    (total,) = _compute(sum(graphs[1:], graphs[0]))
-    return setup, setup.new_statistics().from_vector(np.asarray(total))
+    held = setup.new_held_out()
+    plan = _window_plan(held, xs, us, step)
+    columns = [[xk.astype(float)] + ([_as_dask("u", uk, xk, r)] if r else [])
+               for xk, uk in zip(xs, us, strict=True)]
+    extremes = [[(a.min(axis=0), a.max(axis=0)) for a in parts] for parts in columns]
+    ((total, pieces, extremes),) = _compute((sum(graphs[1:], graphs[0]),
+                                             [(x_, u_) for _, x_, u_, _ in plan], extremes))
+    stats = setup.new_statistics().from_vector(np.asarray(total))
+    for (window, _, _, t), (x_, u_) in zip(plan, pieces, strict=True):
+        window.append(t, np.asarray(x_), None if u_ is None else np.asarray(u_))
+    for parts in extremes:    # per trajectory: [(x min, x max), (u min, u max)]
+        held.extend_range(np.concatenate([lo for lo, _ in parts]),
+                          np.concatenate([hi for _, hi in parts]))
+    stats.held_out = held
+    return setup, stats
+
+
+def _window_plan(held, xs, us, step):
+    """The forecast windows the in-memory fit would keep (same origins, same thinning),
+    as ``(window, x slice, u slice, times)`` with the slices still lazy: only the kept
+    windows are read. Rows are numbered as the statistics number them."""
+    plan, offset = [], 0
+    for k, xk in enumerate(xs):
+        m = xk.shape[0]
+        held.begin(offset)
+        for origin in held.origins(m):
+            window = held.register(origin)
+            lo, hi = origin - window.origin, min(m, origin + held.max_lead + 1)
+            plan.append((window, k, lo, hi))
+        held.end()
+        offset += m
+    kept = {id(w) for w in held.windows}
+    out = []
+    for window, k, lo, hi in plan:
+        if id(window) in kept:
+            u = None if us[k] is None else _as_dask("u", us[k], xs[k], None)[lo:hi]
+            out.append((window, xs[k][lo:hi].astype(float), u, np.arange(lo, hi) * step))
+    return out
 
 
 def _compute(graph):

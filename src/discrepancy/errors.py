@@ -104,6 +104,19 @@ class CoarseSamplingWarning(UserWarning):
 
 class CompilationWarning(UserWarning):
     """A function could not be compiled to C and runs in CasADi's virtual machine instead."""
+class SelectionWarning(UserWarning):
+    """A choice made from the data went against what was asked for or expected (e.g.
+    ``refine`` kept the coefficients it started from because the refit forecast worse)."""
+
+
+class PriorOnlyWarning(SelectionWarning):
+    """No correction beat the prior alone on held-out forecasts: the fit returned the prior
+    alone (``model.prior_only_`` is True)."""
+
+
+class ExtrapolationWarning(UserWarning):
+    """A fitted model was evaluated outside the region of states and inputs its terms were
+    fitted on (``model.region_``); the message names the variables and how far."""
 
 
 def describe(value) -> str:

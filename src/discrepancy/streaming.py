@@ -159,12 +159,17 @@ def stream_statistics(source: ChunkSource, step: float, setup_for: Callable, *,
     feeder = _RowFeeder(acc)
     with tqdm(total=source.n_samples, unit=" samples", unit_scale=True, desc="fit",
               disable=None if progress is None else not progress) as bar:
+        held = acc.total.held_out    # forecast windows, kept as the rows go by
         for chunks in trajectories(layout):
             def counted(chunks=chunks):
                 for chunk in chunks:
+                    if held is not None:
+                        held.add(chunk.t, chunk.x, chunk.u)
                     yield chunk
                     bar.update(chunk.n_rows)
 
+            if held is not None:
+                held.begin(acc.total.count)
             for rows in residual_rows(setup, counted()):
                 feeder.add(*rows)
             feeder.end_trajectory()

@@ -41,7 +41,7 @@ def smoothing_scores(energy, q, t, *, windows=WINDOWS, degrees=DEGREES) -> dict:
             if degree >= window - 2:
                 continue
             smoother = SavitzkyGolay(window_length=window, polyorder=degree)
-            smooth, rate = smoother(q, t)
+            smooth, rate = smoother.smooth_and_differentiate(q, t)
             keep = slice(smoother.edge, len(q) - smoother.edge)
             h = np.asarray(energy(np.hstack([smooth, rate])[keep]), float)
             scores[window, degree] = float(np.sqrt(np.mean(

@@ -6,7 +6,15 @@ import copy
 import numpy as np
 
 from ..base import Estimator
-from ..constraints import InstanceOf, Integral, Interval, Predicate, is_callable, validate_params
+from ..constraints import (
+    InstanceOf,
+    Integral,
+    Interval,
+    Options,
+    Predicate,
+    is_callable,
+    validate_params,
+)
 from ..data.chunks import data_kind
 from ..data.trajectory import Trajectory, as_2d, as_trajectories, is_number
 from ..data.validation import as_float_array, check_vector
@@ -21,6 +29,7 @@ from .checks import checked_discrepancy, pairs
 from .output_methods import OutputErrorMethods
 from .prediction_error_methods import PredictionErrorMethods
 from .pysindy_interface import PySINDyInterface
+from .region import guard, guard_run
 from .setup import FitSetup, resolve_setup
 from .simulation import integrate
 from .term_constraints import Constraints
@@ -55,11 +64,22 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         constraints: a :class:`~discrepancy.models.term_constraints.Constraints`: equations
             without correction, terms confined to some equations, linear (in)equalities on
             coefficients by name (needs an optimizer that takes constraints: STLSQ).
+        selection: how the terms are chosen. ``"auto"`` (default): by forecasts when the
+            optimizer chooses its own sparsity (``STLSQ(threshold="auto")``, the default):
+            equation error proposes supports, free-run and k-step forecasts from origins in
+            held-out blocks of the training data decide, and the prior alone is always a
+            candidate (:mod:`discrepancy.models.term_choice`); a fixed threshold or another
+            optimizer is used as given. ``"forecast"``: also a given optimizer's answer is
+            compared with the prior alone. ``"optimizer"``: the optimizer's own choice.
 
     Fitted attributes: ``coef_`` ``(n, p)``, ``setup_`` (the :class:`FitSetup` used),
     ``statistics_`` (its Gram statistics), ``optimizer_`` (the fitted optimizer) and the
     resolved ``state_names_``, ``input_names_``, ``prior_``, ``feature_library_``,
-    ``differentiation_method_``.
+    ``differentiation_method_``; ``prior_only_`` (no learned term), ``forecast_selection_``
+    (every candidate's forecast score when forecasts chose, else None) and ``region_``
+    (the range of each state and input fitted on, a
+    :class:`~discrepancy.models.region.FittedRegion`: ``simulate`` and ``predict`` warn when
+    they leave it).
     """
 
     _parameter_constraints = {
@@ -71,13 +91,15 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         "state_names": _NAMES, "input_names": _NAMES,
         "constraints": [None, InstanceOf(Constraints, "a discrepancy.Constraints")],
         "discrete_time": [bool],
+        "selection": [Options(["auto", "forecast", "optimizer"])],
     }
     _fit_hint = "fit(x, t)"
     _fitted_attribute = "coef_"
 
     def __init__(self, prior=None, feature_library: FeatureLibrary | str | None = None,
                  optimizer=None, differentiation_method=None, *, state_names=None,
-                 input_names=None, constraints=None, discrete_time: bool = False):
+                 input_names=None, constraints=None, discrete_time: bool = False,
+                 selection: str = "auto"):
         self.prior = prior
         self.feature_library = feature_library
         self.optimizer = optimizer
@@ -86,6 +108,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         self.input_names = input_names
         self.constraints = constraints
         self.discrete_time = discrete_time
+        self.selection = selection
 
     # ----------------------------------------------------------------- fitting
     def fit(self, x, t=None, *args, u=None, x_dot=None, sample_weight=None,
@@ -176,9 +199,16 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         if not np.any(stats.gram):
             raise DataError("the statistics are all zero: every sample has weight 0 or every "
                             "library column is 0 on these data; nothing to fit")
+        from .region import region_of
+        from .term_choice import announce, choose_terms
+
         optimizer = copy.deepcopy(setup.optimizer)
         optimizer.fit_statistics(stats)
-        self._set_fit(setup, optimizer.coef_, optimizer, stats)
+        coef, chosen_by = choose_terms(self, setup, stats, optimizer)
+        self._set_fit(setup, coef, optimizer, stats)
+        self.forecast_selection_ = chosen_by
+        self.region_ = region_of(stats.held_out, self.variable_names_)
+        announce(self, chosen_by)
         return self
 
     def _set_fit(self, setup: FitSetup, coef, optimizer, statistics) -> None:
@@ -192,6 +222,9 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         self.optimizer_, self.statistics_ = optimizer, statistics
         self.feature_expressions_ = list(setup.library.feature_expressions_)
         self.coef_ = np.asarray(coef, dtype=float)
+        self.prior_only_ = not np.any(self.coef_)
+        if not hasattr(self, "region_"):
+            self.region_ = None
         converged = getattr(optimizer, "converged_", None)
         self.converged_ = None if converged is None else dict(zip(
             self.state_names_, np.asarray(converged, dtype=bool).tolist(), strict=True))
@@ -264,7 +297,9 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         if isinstance(x, (list, tuple)):
             return [self.predict(xi, ui) for xi, ui in pairs(x, u)]
         x, u = self._variables(x, u)
-        return self.prior_(x, u) + checked_discrepancy(self, x if u is None else np.hstack([x, u]))
+        z = x if u is None else np.hstack([x, u])
+        guard(self, z, "predict")
+        return self.prior_(x, u) + checked_discrepancy(self, z)
 
     @property
     def complexity(self) -> int:
@@ -305,8 +340,10 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
                        interpolator=interpolator, interpolator_kws=interpolator_kws)
         if self.discrete_time:
             from .discrete import iterate
-            return iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_,
-                           stop_condition=map_options(stop_condition, pysindy, options))
+            states = iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_,
+                             stop_condition=map_options(stop_condition, pysindy, options))
+            guard_run(self, states, u, "simulate")
+            return states
         u, integrator_kws = simulation_options(u, t, stop_condition, pysindy, options)
         if "method" not in integrator_kws and self._has_jumps():
             integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
@@ -314,8 +351,10 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
             from .fast_simulation import compiled_stepper
             integrator_kws["compiled"] = compiled_stepper(self, x0, u,
                                                           integrator_kws.get("substeps", 4))
-        return integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,
-                         n_inputs=self.n_inputs_, **integrator_kws)
+        states = integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,
+                           n_inputs=self.n_inputs_, **integrator_kws)
+        guard_run(self, states, u, "simulate")
+        return states
 
     def predict_ahead(self, x, t=None, *args, u=None, steps: int = 1,
                       u_hold: str = "linear", substeps: int = 4) -> np.ndarray:
@@ -329,9 +368,11 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
 
         require_t("predict_ahead", t, needed=True)
         x = checked_states(self, x, u)
-        return predict_ahead(self._rhs_one, x, t, u,
-                             n_inputs=self.n_inputs_, steps=steps, u_hold=u_hold,
-                             substeps=substeps)
+        ahead = predict_ahead(self._rhs_one, x, t, u,
+                              n_inputs=self.n_inputs_, steps=steps, u_hold=u_hold,
+                              substeps=substeps)
+        guard_run(self, ahead, None if u is None else np.asarray(u)[steps:], "predict_ahead")
+        return ahead
 
     def _has_jumps(self) -> bool:
         """Whether an active term or the (symbolic) prior is discontinuous (``sign``)."""
@@ -504,6 +545,29 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         optimizer.coef_ = fields["coefficients"]
         model._set_fit(setup, fields["coefficients"], optimizer, None)
         model.differentiation_choice_ = fields["differentiation_choice"]
+        model.region_, model.forecast_selection_ = fields["region"], None
+        return model
+
+    @classmethod
+    def from_prior(cls, prior, *, state_names=None, input_names=None,
+                   discrete_time: bool = False) -> DiscrepancyModel:
+        """The prior alone as a fitted model, without data: no correction (``prior_only_``
+        is True), simulated, scored, exported and saved like any fitted model. The states
+        are ``state_names`` or, for a sympy prior, one per expression; inputs
+        ``input_names`` (none by default). With data, ``DiscrepancyModel(prior=f_m,
+        optimizer="prior_only").fit(x, t)`` gives the same model."""
+        names = [state_names] if isinstance(state_names, str) else state_names
+        if names is None and not isinstance(prior, (list, tuple)):
+            raise ParameterError("from_prior needs state_names (the states of a callable "
+                                 "prior); a sympy prior gives them by its length")
+        n = len(prior) if names is None else len(names)
+        inputs = [input_names] if isinstance(input_names, str) else (input_names or [])
+        model = cls(prior=prior, optimizer="prior_only", state_names=state_names,
+                    input_names=input_names if inputs else None, discrete_time=discrete_time)
+        setup = model.make_setup(n, len(inputs))
+        model._set_fit(setup, np.zeros((n, setup.n_features)), copy.deepcopy(setup.optimizer),
+                       None)
+        model.differentiation_choice_, model.forecast_selection_ = None, None
         return model
 
     def save(self, path) -> None:

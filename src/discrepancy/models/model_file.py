@@ -27,11 +27,16 @@ from ..symbolic import IDENTIFIER, from_data, to_data
 
 _NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
 FORMAT = "discrepancy-model"
-VERSION = 2
-#: keys of each version (version 1 files, written before components were stored, still load)
+VERSION = 3
+#: keys of each version (version 1 files, written before components were stored, and
+#: version 2 files, before the fitted region and the forecast choice were, still load)
 KEYS = {1: {"format", "version", "written_by", "state_names", "input_names", "features",
             "coefficients", "prior", "user_functions", "metadata"}}
 KEYS[2] = KEYS[1] | {"optimizer", "differentiation_method", "fit"}
+KEYS[3] = KEYS[2] | {"region"}
+#: keys of the ``fit`` record by version
+FIT_KEYS = {2: {"n_samples", "differentiation_choice"}}
+FIT_KEYS[3] = FIT_KEYS[2] | {"selection"}
 #: larger files are refused before parsing (a model of 1000 terms x 100 states is ~2 MB)
 MAX_BYTES = 20 * 2**20
 
@@ -49,6 +54,8 @@ def encode(model) -> dict:
     else:
         prior = {"kind": "callable", "name": getattr(model.prior, "__qualname__", "prior")[:200]}
     stats = model.statistics_
+    region = getattr(model, "region_", None)
+    chosen = getattr(model, "forecast_selection_", None)
     return {
         "format": FORMAT, "version": VERSION, "written_by": f"discrepancy {__version__}",
         "state_names": model.state_names_, "input_names": model.input_names_,
@@ -58,7 +65,9 @@ def encode(model) -> dict:
         "optimizer": _spec_or_none(OPTIMIZERS, model.optimizer_),
         "differentiation_method": _spec_or_none(METHODS, model.differentiation_method_),
         "fit": {"n_samples": None if stats is None else int(stats.count),
-                "differentiation_choice": _plain(model.differentiation_choice_)},
+                "differentiation_choice": _plain(model.differentiation_choice_),
+                "selection": None if chosen is None else _plain(chosen.summary())},
+        "region": None if region is None else region.to_data(),
         "metadata": {"optimizer": repr(model.optimizer_),
                      "feature_library": repr(model.feature_library),
                      "differentiation_method": repr(model.differentiation_method_)},
@@ -137,7 +146,7 @@ def decode(doc, *, prior=None, functions=None) -> dict:
     from ..libraries import CustomLibrary
 
     version = _version(doc)
-    choice = _fit_record(doc["fit"]) if version >= 2 else None
+    choice = _fit_record(doc["fit"], version) if version >= 2 else None
     states, inputs = _names(doc, "state_names"), _names(doc, "input_names")
     declared = doc["user_functions"]
     if not isinstance(declared, list) or not all(isinstance(f, str) and IDENTIFIER.match(f)
@@ -160,20 +169,34 @@ def decode(doc, *, prior=None, functions=None) -> dict:
             "library": CustomLibrary(features, functions=used or None),
             "optimizer": _component(doc, "optimizer", version),
             "differentiation_method": _component(doc, "differentiation_method", version),
-            "differentiation_choice": choice}
+            "differentiation_choice": choice,
+            "region": _region(doc, version, [*states, *inputs])}
 
 
-def _fit_record(fit) -> dict | None:
+def _fit_record(fit, version: int) -> dict | None:
     """The checked ``fit`` record; returns the stored differentiation choice (or None)."""
-    if not (isinstance(fit, dict) and set(fit) == {"n_samples", "differentiation_choice"}
+    keys = FIT_KEYS[version]
+    if not (isinstance(fit, dict) and set(fit) == keys
             and (fit["n_samples"] is None or type(fit["n_samples"]) is int)):
-        raise _fail("fit must be {'n_samples': an integer or null, 'differentiation_choice': "
-                    "an object or null}")
-    choice = fit["differentiation_choice"]
-    if choice is not None and not (isinstance(choice, dict) and _is_plain(choice, 0)):
-        raise _fail("fit.differentiation_choice must be an object of names, numbers and "
-                    "lists")
-    return choice
+        raise _fail(f"fit must be an object with exactly the keys {sorted(keys)} "
+                    "('n_samples': an integer or null, the others objects or null)")
+    for key in keys - {"n_samples"}:
+        value = fit[key]
+        if value is not None and not (isinstance(value, dict) and _is_plain(value, 0)):
+            raise _fail(f"fit.{key} must be an object of names, numbers and lists")
+    return fit["differentiation_choice"]
+
+
+def _region(doc, version: int, names):
+    """The fitted region (None before version 3 or when none was recorded)."""
+    from .region import FittedRegion
+
+    if version < 3 or doc["region"] is None:
+        return None
+    try:
+        return FittedRegion.from_data(doc["region"], names)
+    except ValueError as e:
+        raise _fail(str(e)) from None
 
 
 def _is_plain(value, depth: int) -> bool:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..optimizers import PriorOnly, get_optimizer
 from .arguments import keywords_only
 
 _COMMON = """
@@ -48,12 +49,19 @@ class OutputErrorMethods:
         After the fit, ``x0_`` holds the estimated initial states, ``output_selection_``
         the scored supports, ``output_error_`` the scaled RMS output error of the fit and
         ``uncertainty_`` the coefficients' uncertainty (a Gauss–Newton sandwich over blocks
-        of samples, as draws: ``model.print(uncertainty=model.uncertainty_)``).
+        of samples, as draws: ``model.print(uncertainty=model.uncertainty_)``). The path
+        ends with no term: when that is chosen the model is the prior alone
+        (``prior_only_``, with a ``PriorOnlyWarning``). ``region_`` is the range of the
+        states along the fitted simulation and of the inputs (``simulate`` warns beyond).
         """
         keywords_only("fit_outputs", args, "u, outputs and the options")
         from .output_fit import fit_outputs
 
         self._validate_params()
+        if isinstance(get_optimizer(self.optimizer), PriorOnly):
+            return self._fit_prior_outputs(y, t, u, outputs=outputs, x0=x0,
+                                           x0_bounds=x0_bounds, u_hold=u_hold,
+                                           substeps=substeps)
         setup, coef, x0s, fit, path, error = fit_outputs(
             self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
             substeps=substeps, max_terms=max_terms, holdout=holdout, tolerance=tolerance,
@@ -61,6 +69,7 @@ class OutputErrorMethods:
         self._set_fit(setup, coef, None, None)
         self._keep_outputs(y, x0s, fit, error)
         self.output_selection_ = path
+        self._after_output_fit(y, t, u, x0s, substeps, u_hold, chosen_by_path=bool(path))
         return self
 
     def refine(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
@@ -70,15 +79,29 @@ class OutputErrorMethods:
         fit whose derivatives were noisy or whose velocities were estimated. Sets ``x0_``,
         ``output_error_`` and ``uncertainty_`` as :meth:`fit_outputs` does.
 
+        Never worse than the model it starts from on held-out forecasts: the refit is
+        repeated on the first 75 % of every record and both models forecast the rest;
+        when the refit forecasts worse, the coefficients are kept (only the initial states
+        are estimated) with a ``SelectionWarning``. ``refine_check_`` holds both held-out
+        errors and the outcome (:func:`discrepancy.selection.output_checks.check_refine`).
+
         Args:{common}
         """
         keywords_only("refine", args, "u, outputs and the options")
         self.check_is_fitted()
         from .output_fit import refit_outputs
 
+        before = self.coef_.copy()
         coef, x0s, fit = refit_outputs(self, y, t, u, outputs=outputs, x0=x0,
                                        x0_bounds=x0_bounds, u_hold=u_hold,
                                        substeps=substeps, coefficients=True)
+        from ..selection.output_checks import check_refine
+
+        kw = dict(outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
+                  substeps=substeps)
+        self.refine_check_ = check_refine(self, before, y, t, u, **kw)
+        if self.refine_check_["kept_original"]:   # the refit forecast worse: keep the model
+            coef, x0s, fit = refit_outputs(self, y, t, u, coefficients=False, **kw)
         self._set_fit(self.setup_, coef, self.optimizer_, self.statistics_)
         self._keep_outputs(y, x0s, fit, fit.error(coef, x0s, [np.ones(r.m, bool)
                                                                for r in fit.records]))
@@ -100,14 +123,54 @@ class OutputErrorMethods:
                                   u_hold=u_hold, substeps=substeps, coefficients=False)
         return list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
 
+    def _fit_prior_outputs(self, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps):
+        """The prior alone by output error: only the initial states are estimated."""
+        import copy
+
+        from ..data.trajectory import as_trajectories
+        from ..selection.output_checks import state_count
+        from .output_fit import refit_outputs
+
+        first = as_trajectories(y, t, u, x_name="y")[0]
+        setup = self.make_setup(state_count(self, x0), 0 if first.u is None else
+                                first.u.shape[1])
+        self._set_fit(setup, np.zeros((setup.n_states, setup.n_features)),
+                      copy.deepcopy(setup.optimizer), None)
+        coef, x0s, fit = refit_outputs(self, y, t, u, outputs=outputs, x0=x0,
+                                       x0_bounds=x0_bounds, u_hold=u_hold, substeps=substeps,
+                                       coefficients=False)
+        self.x0_ = list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
+        self.output_error_ = fit.error(coef, x0s, [np.ones(rec.m, bool) for rec in fit.records])
+        self.output_names_ = list(fit.out_map.names)
+        self.uncertainty_, self.output_selection_ = None, []
+        self._after_output_fit(y, t, u, x0s, substeps, u_hold, chosen_by_path=False)
+        return self
+
+    def _after_output_fit(self, y, t, u, x0s, substeps, u_hold, *, chosen_by_path):
+        """The region along the fitted simulation; a prior-only outcome flagged."""
+        import warnings
+
+        from ..errors import PriorOnlyWarning
+        from ..selection.output_checks import simulated_region
+
+        self.forecast_selection_, self.region_ = None, None
+        self.region_ = simulated_region(self, y, t, u, x0s=x0s, substeps=substeps,
+                                        u_hold=u_hold)
+        if chosen_by_path and self.prior_only_:
+            warnings.warn("no support forecast the held-out end of the records better than "
+                          "the prior alone: the model is the prior alone (model.prior_only_ "
+                          "is True; model.output_selection_ has every support's score)",
+                          PriorOnlyWarning, stacklevel=3)
+
     def _keep_outputs(self, y, x0s, fit, error):
         from .output_fit import sandwich_uncertainty
 
         self.x0_ = list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
         self.output_error_ = error
         self.output_names_ = list(fit.out_map.names)
-        self.uncertainty_ = sandwich_uncertainty(self, fit.covariance,
-                                                 fit.covariance_blocks - 1)
+        covariance = getattr(fit, "covariance", None)   # none when only x0 was fitted
+        self.uncertainty_ = None if covariance is None else sandwich_uncertainty(
+            self, covariance, fit.covariance_blocks - 1)
 
     fit_outputs.__doc__ = fit_outputs.__doc__.format(common=_COMMON)
     refine.__doc__ = refine.__doc__.format(common=_COMMON)

@@ -56,6 +56,18 @@ class Prior:
         """
         return self.expressions is not None
 
+    def unchecked(self, x: np.ndarray, u: np.ndarray | None) -> np.ndarray:
+        """``f_m(x, u)`` where non-finite values are allowed (a forecast that left the
+        prior's domain, e.g. a negative tank level under a square root; call it inside
+        ``np.errstate(all="ignore")``); errors still raise PriorError."""
+        if self._call is None:
+            return np.zeros_like(x)
+        try:
+            return np.asarray(self._call(x, u), dtype=float).reshape(x.shape)
+        except Exception as e:
+            raise PriorError(f"prior raised {type(e).__name__}: {e} when called with x of shape "
+                             f"{x.shape} and u {None if u is None else u.shape}") from e
+
     def __call__(self, x: np.ndarray, u: np.ndarray | None) -> np.ndarray:
         """``f_m(x, u)`` ``(m, n)``; zeros for no prior. Raises PriorError on bad output."""
         if self._call is None:

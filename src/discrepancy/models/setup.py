@@ -17,7 +17,7 @@ from ..data.trajectory import Trajectory
 from ..differentiation import Differentiator, WeakForm
 from ..errors import ParameterError, ShapeError
 from ..libraries import FeatureLibrary
-from ..optimizers import GramStatistics, Optimizer
+from ..optimizers import GramStatistics, Optimizer, PriorOnly
 from ..symbolic import IDENTIFIER
 from .prior import Prior
 
@@ -161,7 +161,22 @@ class FitSetup:
         p, n = self.n_features, self.n_states
         check_memory(f"the Gram statistics of {p} library columns", statistics_bytes(p, n),
                      SMALLER_LIBRARY + "; they are p x p, so chunked fitting does not help")
-        return GramStatistics(p, n, N_FOLDS, self.fold_segment)
+        stats = GramStatistics(p, n, N_FOLDS, self.fold_segment)
+        stats.held_out = self.new_held_out()
+        return stats
+
+    def new_held_out(self):
+        """Empty forecast windows for these statistics' folds (see
+        :mod:`discrepancy.selection.held_out`); ``pre``: the smoothing's halo (none for maps
+        and the weak form, whose origins are raw samples)."""
+        from ..selection.held_out import GLOBAL_PRE, HeldOutWindows
+
+        if self.discrete_time or isinstance(self.differentiation, WeakForm):
+            pre = 0
+        else:
+            halo = self.differentiation.halo
+            pre = GLOBAL_PRE if halo is None else int(halo)
+        return HeldOutWindows(self.fold_segment, N_FOLDS, pre)
 
     @cached_property
     def names(self):
@@ -184,6 +199,10 @@ class FitSetup:
         z, y, x_dot = self.rows(trajectory)
         weight = self.row_weights(trajectory)
         weight = None if weight is None else weight[:len(z)]
+        if stats.held_out is not None:   # forecast windows, in the rows' numbering
+            stats.held_out.begin(stats.count)
+            stats.held_out.add(trajectory.t, trajectory.x, trajectory.u)
+            stats.held_out.end()
         first = stats.count
         accumulate(stats, self.transform, z, y, x_dot, weight, names=self.names)
         if self.optimizer.needs_rows:  # trimming or bagging samples: keep the rows too
@@ -254,7 +273,7 @@ def resolve_setup(model, n_states: int, n_inputs: int, sample=None,
         method, choice = _resolved(method, sample, states)
     optimizer = copy.deepcopy(get_optimizer(model.optimizer))
     optimizer._validate_params()
-    if model.constraints is not None:
+    if model.constraints is not None and not isinstance(optimizer, PriorOnly):
         if "constraints" not in optimizer.get_params(deep=False):
             raise ParameterError(f"constraints need an optimizer that takes them (STLSQ); "
                                  f"{type(optimizer).__name__} does not")

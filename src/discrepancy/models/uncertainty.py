@@ -5,7 +5,10 @@ smoothing and differentiation put into neighbouring samples) and each block's
 ``ΘᵀΘ``, ``Θᵀy`` and ``yᵀy`` are computed once. A resample is then a combination
 of those p×p statistics followed by the model's own optimizer, so it costs a p×p
 solve, not a pass over the data, and term selection is resampled too
-(inclusion probabilities). Two schemes:
+(inclusion probabilities). A model whose terms were chosen by forecasts (the default
+selection) keeps them in every resample (re-running the forecasts 200 times would cost
+200 selections): its intervals are those of the chosen terms' coefficients, each included
+with probability 1. Two schemes:
 
 * ``"wild"`` (default): fixed design, block residuals ``e_b = y_b − Θ_b ξ̂`` flipped
   by random signs ``s_b``: ``Θᵀy* = ΘᵀΘ ξ̂ + Σ_b s_b Θ_bᵀ e_b``. This answers "how
@@ -196,11 +199,22 @@ def bootstrap(model, x, t=None, u=None, x_dot=None, *, n_resamples: int = 200,
             stats = from_blocks(gram * w[:, None, None], rhs * w[:, None, None],
                                 yy * w[:, None], signal * w[:, None], counts * w, folds,
                                 template)
-        opt = copy.deepcopy(model.optimizer_)
-        opt.fit_statistics(stats)
-        samples[r] = opt.coef_
+        samples[r] = _resample_fit(model, stats)
     return CoefficientUncertainty(model.coef_.copy(), samples, list(model.state_names_),
                                   model.get_feature_names(), length)
+
+
+def _resample_fit(model, stats) -> np.ndarray:
+    """Coefficients of one resample: the model's optimizer, or its forecast-chosen terms
+    refitted (least squares, the optimizer's constraints)."""
+    if getattr(model, "forecast_selection_", None) is None:
+        opt = copy.deepcopy(model.optimizer_)
+        opt.fit_statistics(stats)
+        return opt.coef_
+    from ..selection.candidates import FoldFits
+
+    constraints = getattr(model.setup_.optimizer, "constraints", None)
+    return FoldFits(stats, constraints, 0.0).coefficients(model.coef_ != 0, None)
 
 
 def _check_uncertainty(model, uncertainty) -> None:

@@ -39,6 +39,10 @@ class GramStatistics:
             counted over all trajectories in order, is in fold ``(i // segment) % n_folds``).
         rows: the rows themselves (:class:`~discrepancy.optimizers.resampling.Rows`), kept
             only for solvers that need them (``needs_rows``: trimming, bagging samples).
+        held_out: samples kept beside the sums by whoever feeds them (a model's fit keeps
+            forecast windows and the range of every variable there,
+            :class:`discrepancy.selection.held_out.HeldOutWindows`), or ``None``; merged by
+            ``+=``, never read by the solvers.
     """
 
     p: int
@@ -52,6 +56,7 @@ class GramStatistics:
     count: int = 0
     folds: list | None = field(init=False, default=None)
     rows: object = field(init=False, default=None, repr=False)
+    held_out: object | None = field(init=False, default=None)
 
     def __post_init__(self):
         sizes = {"p": self.p, "n": self.n, "n_folds": self.n_folds, "segment": self.segment}
@@ -123,6 +128,10 @@ class GramStatistics:
                              f"n={self.n}, {self.n_folds} folds of {self.segment} rows)")
         if other.rows is not None:  # rows are kept beside the sums, not summed with them
             self.rows = other.rows if self.rows is None else self.rows + other.rows
+        if other.held_out is not None:
+            if self.held_out is None:
+                self.held_out = other.held_out.empty_like()
+            self.held_out.merge(other.held_out)
         if self.folds is not None:
             for mine, theirs in zip(self.folds, other.folds, strict=True):
                 mine += theirs

@@ -103,6 +103,17 @@ def cross_validates(stats) -> bool:
         and len(stats.usable_folds()) >= 2
 
 
+def one_standard_error(error, se, sizes) -> int:
+    """The one-standard-error rule: the index of the smallest model (``sizes``, ties broken
+    by the lower error) whose mean ``error`` is within one standard error ``se`` of the
+    best's. The one implementation of the rule (the threshold path here, forecast scores in
+    :mod:`discrepancy.selection`)."""
+    error = np.asarray(error, dtype=float)
+    best = int(np.argmin(error))
+    ok = [j for j in range(len(error)) if error[j] <= error[best] + se[best]]
+    return min(ok, key=lambda j: (sizes[j], error[j]))
+
+
 def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.ndarray,
                                                                  list[dict]]:
     """Per target, the selected STLSQ solution over the threshold path (within the
@@ -110,7 +121,8 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
 
     Returns ``(coef (n, p), thresholds (n,), selection)``; ``selection[i]`` describes the
     scored path of target ``i``: ``thresholds``, ``n_terms``, ``error`` (cross-validated
-    mean squared error, or BIC), ``error_se``, ``criterion`` and the ``chosen`` index.
+    mean squared error, or BIC), ``error_se``, ``criterion``, the ``chosen`` index and the
+    ``supports`` (``(p,)`` bool each) along the path.
     """
     p, n = stats.rhs.shape
     coef, chosen_thresholds, selection = np.zeros((n, p)), np.zeros(n), []
@@ -126,9 +138,7 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
                       for _, s in path]
             error = np.array([e.mean() for e in scores])
             se = np.array([e.std(ddof=1) / np.sqrt(len(e)) for e in scores])
-            best = int(np.argmin(error))
-            ok = [j for j in range(len(path)) if error[j] <= error[best] + se[best]]
-            pick = min(ok, key=lambda j: (path[j][1].sum(), error[j]))
+            pick = one_standard_error(error, se, [int(s.sum()) for _, s in path])
         else:  # residuals below FLOOR of the signal are numerical, as in the folds
             floor = FLOOR * max(stats.signal[i], stats.yy[i])
             error = np.array([bic(max(_rss(stats, i, _refit(stats.gram, stats.rhs[:, i], s,
@@ -147,7 +157,7 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
                           "n_terms": [int(s.sum()) for _, s in path],
                           "error": error.tolist(), "error_se": se.tolist(),
                           "criterion": "blocked cross-validation" if use_cv else "BIC",
-                          "chosen": pick})
+                          "chosen": pick, "supports": [s.copy() for _, s in path]})
     return coef, chosen_thresholds, selection
 
 

@@ -20,6 +20,7 @@ EXPERIMENTS = {
     "silverbox": ("silverbox", "run"),
     "cascaded-tanks": ("cascaded_tanks", "run"),
     "prediction-error": ("prediction_error", "run"),
+    "blind-selection": ("blind_selection", "run"),
 }
 
 

@@ -1,0 +1,290 @@
+"""Libraries and procedures chosen by forecasts inside the training data.
+
+:func:`choose_procedure` generalises the energy module's blind protocol to any
+``DiscrepancyModel``: every candidate (a library, or a whole unfitted model: library,
+smoothing, optimizer, constraints) and the prior alone is fitted on the first part of every
+record and forecasts what follows, from several origins (rolling origin: the first part
+grows, the last forecast ends where the data end). The candidate with the best mean
+forecast wins by the one-standard-error rule over the origins, the fewest terms first among
+ties, and is fitted on all the data. Nothing but the data given is read, so a test record
+kept apart stays unseen.
+
+Forecasts: with every state measured (``fit``), from the state at the origin over the
+horizon (a quarter of the shortest record unless given), scored as the model's own
+selection scores them (the initial state fitted to the window, each window until the
+prior's sensitivity to its start saturates, :mod:`.forecast`).
+With outputs (``fit_outputs``), the fitted simulation continues past the origin and its
+outputs are scored to the end of each record (as the benchmarks score a model).
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..data.trajectory import as_trajectories
+from ..errors import ConvergenceError, DataError, ParameterError, describe
+from ..libraries import FeatureLibrary
+from ..optimizers.selection import one_standard_error
+from .choice import TOLERANCE
+
+#: where the first origin lies, as a share of each record
+FIRST_ORIGIN = 0.5
+#: the forecast length of output fits, and the most of a record a state forecast takes
+HORIZON_SHARE = 0.25
+
+
+@dataclass
+class ProcedureChoice:
+    """Result of :func:`choose_procedure`.
+
+    Attributes:
+        chosen: name of the chosen candidate; model: it, fitted on all the data.
+        scores: per candidate ``{"forecast_errors": [per origin], "mean", "se", "n_terms"
+            (fitted on the largest training part), "prior_only"}``; errors are mean scaled
+            squared errors (each state or output divided by its standard deviation).
+        origins: each origin as a share of the records; horizon: forecast length in samples
+            (``None``: to each record's end).
+    """
+
+    chosen: str
+    model: object = field(repr=False)
+    scores: dict = field(repr=False)
+    origins: list = field(default_factory=list)
+    horizon: int | None = None
+
+    def table(self) -> str:
+        lines = [f"{'candidate':<32} {'terms':>5} {'forecast error':>14} {'± s.e.':>9}"]
+        for name, row in self.scores.items():
+            mark = "  <- chosen" if name == self.chosen else ""
+            lines.append(f"{name:<32} {row['n_terms']:>5} {row['mean']:>14.5g} "
+                         f"{row['se']:>9.2g}{mark}")
+        return "\n".join(lines)
+
+
+def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
+                     n_origins: int = 3, horizon: int | None = None, fit_kws=None,
+                     progress: bool | None = None) -> ProcedureChoice:
+    """Choose a library or procedure for ``model`` by forecasts inside ``x``.
+
+    Args:
+        model: an unfitted :class:`~discrepancy.DiscrepancyModel` (its prior and the
+            parameters candidates do not set).
+        x: states ``(m, n)``, or outputs when ``outputs`` is given; or a list of records.
+        t, u: as for ``fit``.
+        candidates: ``{name: FeatureLibrary, library spec or unfitted DiscrepancyModel}``;
+            default :func:`~.candidate_libraries.default_libraries` of the data and prior.
+            The prior alone is always added (``"prior alone"``).
+        outputs: what ``x`` measures (then every candidate is fitted by ``fit_outputs``).
+        n_origins: forecast origins (at least 2), from half of every record on.
+        horizon: forecast length in samples (state fits; default a quarter of the shortest
+            record; each window is scored until the prior's sensitivity to its initial state
+            says forecasts stop meaning anything, as in the model's own selection).
+        fit_kws: further keyword arguments of ``fit`` or ``fit_outputs``.
+    """
+    from tqdm.auto import tqdm
+
+    records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
+    if not isinstance(n_origins, (int, np.integer)) or isinstance(n_origins, bool) or \
+            n_origins < 2:
+        raise ParameterError(f"n_origins must be an integer >= 2; got {n_origins!r}")
+    templates = _templates(model, candidates, records, outputs)
+    fit_kws = dict(fit_kws or {})
+    shortest = min(r.n_samples for r in records)
+    share = HORIZON_SHARE if outputs is not None or horizon is None else horizon / shortest
+    if not 0 < share < 1 - FIRST_ORIGIN:
+        raise ParameterError(f"horizon must be a number of samples below "
+                             f"{int(shortest * (1 - FIRST_ORIGIN))}; got {horizon!r}")
+    fractions = np.linspace(FIRST_ORIGIN, 1 - share, n_origins)
+    judge = _OutputForecasts(records, outputs, fit_kws) if outputs is not None else \
+        _StateForecasts(records, fit_kws, horizon)
+    scores, fitted = {}, {}
+    for name, template in tqdm(list(templates.items()), desc="procedures",
+                               disable=None if progress is None else not progress):
+        errors, last = [], None
+        for f in fractions:
+            errors.append(judge.score(template, f))
+            last = judge.last
+        scores[name] = {"forecast_errors": errors, "mean": float(np.mean(errors)),
+                        "se": float(np.std(errors, ddof=1) / np.sqrt(len(errors))),
+                        "n_terms": 0 if last is None else int(np.count_nonzero(last.coef_)),
+                        "prior_only": last is None or bool(last.prior_only_)}
+        fitted[name] = template
+    names = list(scores)
+    mean = np.array([scores[k]["mean"] for k in names])
+    se = np.array([scores[k]["se"] for k in names])
+    finite = np.isfinite(mean)
+    if not finite.any():
+        raise ConvergenceError("every candidate's forecasts diverged on these data")
+    mean = np.where(finite, mean, np.inf)
+    margin = np.maximum(np.nan_to_num(se, nan=0.0), TOLERANCE * mean[finite].min())
+    pick = names[one_standard_error(mean, margin, [scores[k]["n_terms"] for k in names])]
+    final = judge.fit(fitted[pick], 1.0)
+    return ProcedureChoice(pick, final, scores, fractions.tolist(), judge.horizon)
+
+
+def _templates(model, candidates, records, outputs) -> dict:
+    from ..models import DiscrepancyModel
+    from ..models.setup import resolve_names
+    from .candidate_libraries import default_libraries
+    from .output_checks import state_count
+
+    if not isinstance(model, DiscrepancyModel) or hasattr(model, "coef_"):
+        raise ParameterError(f"model must be an unfitted DiscrepancyModel; got "
+                             f"{describe(model)}")
+    if candidates is None:
+        first = records[0]
+        r = 0 if first.u is None else first.u.shape[1]
+        n = first.x.shape[1] if outputs is None else state_count(model)
+        states = resolve_names("state_names", model.state_names, n, "x", one=None)
+        inputs = resolve_names("input_names", model.input_names, r, "u", one="u")
+        x, measured = _variables_with_data(records, states, outputs)
+        u = None if first.u is None else np.vstack([rec.u for rec in records])
+        candidates = default_libraries(states, inputs, x, u, prior=model.prior,
+                                       measured=[*measured, *inputs])
+    if not isinstance(candidates, Mapping) or not candidates:
+        raise ParameterError(f"candidates must be a non-empty mapping of names to libraries "
+                             f"or unfitted DiscrepancyModels; got {describe(candidates)}")
+    out = {"prior alone": _clone(model).set_params(optimizer="prior_only", selection="auto")}
+    for name, c in candidates.items():
+        if isinstance(c, (FeatureLibrary, str)):
+            out[str(name)] = _clone(model).set_params(feature_library=c)
+        elif isinstance(c, DiscrepancyModel) and not hasattr(c, "coef_"):
+            out[str(name)] = _clone(c)
+        else:
+            raise ParameterError(f"candidates[{name!r}] must be a FeatureLibrary, a library "
+                                 f"spec or an unfitted DiscrepancyModel; got {describe(c)}")
+    return out
+
+
+def _clone(model):
+    return type(model)(**model.get_params(deep=False))
+
+
+def _variables_with_data(records, states, outputs):
+    """States ``(m, n)`` (NaN where unmeasured) and the names of the measured ones."""
+    if outputs is None:
+        return np.vstack([r.x for r in records]), list(states)
+    from ..models.outputs import OutputMap
+
+    out_map = OutputMap(outputs, states)
+    y = np.vstack([r.x for r in records])
+    x = np.full((len(y), len(states)), np.nan)
+    measured = []
+    if out_map.selected is not None:
+        for k, i in enumerate(out_map.selected):
+            x[:, i] = y[:, k]
+            measured.append(states[i])
+    return x, measured
+
+
+class _Judge:
+    """Fits a candidate on each record's first part (``fraction``); every measured signal
+    scaled by its standard deviation over all the data."""
+
+    horizon = None
+
+    def __init__(self, records, fit_kws):
+        self.records, self.fit_kws, self.last = records, fit_kws, None
+        data = np.vstack([r.x for r in records])
+        self.scale = np.where(data.std(axis=0) > 0, data.std(axis=0), 1.0)
+
+    def fit(self, template, fraction):
+        parts = [_head(r, fraction) for r in self.records]
+        u = None if parts[0].u is None else [p.u for p in parts]
+        return self._fit(_clone(template), [p.x for p in parts], [p.t for p in parts], u)
+
+
+class _StateForecasts(_Judge):
+    """Forecast from the state at the origin (initial state fitted to the window, as the
+    model's own selection scores), each window scored until the prior's sensitivity to
+    its start reaches the selection's limit."""
+
+    def __init__(self, records, fit_kws, horizon):
+        super().__init__(records, fit_kws)
+        shortest = min(r.n_samples for r in records)
+        self.horizon = int(HORIZON_SHARE * shortest) if horizon is None else int(horizon)
+
+    def _fit(self, model, x, t, u):
+        return model.fit(x, t=t, u=u, **self.fit_kws)
+
+    def score(self, template, fraction) -> float:
+        import warnings
+
+        from .forecast import forecast_scores, prepare
+        from .horizon import sensitive_leads
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            self.last = model = self.fit(template, fraction)
+        setup = model.setup_
+        origins = prepare(self._windows(setup, fraction), setup, scale=self.scale)
+        W, everything = origins.n_windows, np.arange(origins.n_windows)
+        coef = np.repeat(model.coef_[None], W, axis=0)
+        steps = max(1, min(self.horizon // origins.stride, origins.max_steps))
+        origins = origins.subset(everything, steps)
+        prior = forecast_scores(setup, origins, np.zeros_like(coef), everything, steps)
+        origins = sensitive_leads(origins, prior)
+        return float(np.mean(forecast_scores(setup, origins, coef, everything, steps).score))
+
+    def _windows(self, setup, fraction):
+        from .held_out import Window
+
+        pre, windows = setup.new_held_out().pre, []
+        for rec in self.records:
+            cut = int(round(rec.n_samples * fraction))
+            lo, hi = max(0, cut - pre), min(rec.n_samples, cut + self.horizon + 1)
+            window = Window(0, cut - lo, hi - lo)
+            window.append(rec.t[lo:hi], rec.x[lo:hi], None if rec.u is None else rec.u[lo:hi])
+            if window.lead >= 2:
+                windows.append(window)
+        if not windows:
+            raise DataError("the records are too short to forecast from the origins")
+        return windows
+
+
+class _OutputForecasts(_Judge):
+    """Fit by output error on each record's first part; the fitted simulation continues to
+    the record's end, its outputs scored after the origin."""
+
+    def __init__(self, records, outputs, fit_kws):
+        super().__init__(records, fit_kws)
+        self.outputs = outputs
+
+    def _fit(self, model, y, t, u):
+        return model.fit_outputs(y, t=t, u=u, outputs=self.outputs, **self.fit_kws)
+
+    def score(self, template, fraction) -> float:
+        import warnings
+
+        from ..models.outputs import OutputMap
+        from .output_checks import simulate_quietly
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                self.last = model = self.fit(template, fraction)
+            except ConvergenceError:
+                self.last = None
+                return float("inf")
+        out_map = OutputMap(self.outputs, model.state_names_)
+        x0s = model.x0_ if isinstance(model.x0_, list) else [model.x0_]
+        squares = []
+        for x0, rec in zip(x0s, self.records, strict=True):
+            cut = int(round(rec.n_samples * fraction))
+            try:
+                sim = out_map(simulate_quietly(model, x0, rec, self.fit_kws.get("substeps", 4),
+                                        self.fit_kws.get("u_hold", "linear")))
+            except ConvergenceError:
+                return float("inf")
+            squares.append((((sim - rec.x) / self.scale)[cut:]) ** 2)
+        value = float(np.mean(np.vstack(squares)))
+        return value if np.isfinite(value) else float("inf")
+
+
+def _head(record, fraction):
+    from ..data.trajectory import Trajectory
+
+    k = record.n_samples if fraction >= 1 else int(round(record.n_samples * fraction))
+    return Trajectory(record.t[:k], record.x[:k], None if record.u is None else record.u[:k])

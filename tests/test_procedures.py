@@ -1,0 +1,103 @@
+"""Libraries chosen by forecasts inside the training data (choose_procedure) and the
+default candidates, against systems whose missing law is known."""
+import numpy as np
+import pytest
+import sympy as sp
+
+import discrepancy as dc
+from discrepancy.selection.candidate_libraries import default_libraries, velocity_states
+
+
+def coulomb(x, u):
+    return np.stack([x[..., 1], -x[..., 0] - 0.3 * np.tanh(x[..., 1] / 0.01) + u[..., 0]],
+                    axis=-1)
+
+
+def oscillator(x, u=None):
+    return np.stack([x[..., 1], -x[..., 0]], axis=-1)
+
+
+def forced_oscillator(x, u):
+    return np.stack([x[..., 1], -x[..., 0] + u[..., 0]], axis=-1)
+
+
+@pytest.fixture(scope="module")
+def friction_records(helpers):
+    """A forced oscillator with Coulomb friction 0.3 (a tanh 0.01 wide), two records."""
+    t = np.arange(3001) * 0.01
+    rng = np.random.default_rng(0)
+    xs, us = [], []
+    for w in (0.6, 1.4):
+        xs.append(helpers.integrate(lambda x, u: coulomb(x, u), [0.0, 1.0], t,
+                                    u=lambda s, w=w: np.array([1.5 * np.sin(w * s)]))
+                  + 0.01 * rng.standard_normal((len(t), 2)))
+        us.append(1.5 * np.sin(w * t)[:, None])
+    return xs, us
+
+
+def test_a_missing_coulomb_friction_is_found_among_the_default_libraries(friction_records):
+    xs, us = friction_records
+    choice = dc.choose_procedure(dc.DiscrepancyModel(prior=forced_oscillator), xs, t=0.01,
+                                 u=us, progress=False)
+    assert choice.chosen == "linear + friction"
+    names = choice.model.get_feature_names()
+    assert np.count_nonzero(choice.model.coef_) == 1
+    coulomb_term = next(n for n in names if n.startswith("tanh(") and "exp" not in n)
+    assert choice.model.coef_[1, names.index(coulomb_term)] == pytest.approx(-0.3, rel=0.03)
+    assert set(choice.scores) >= {"prior alone", "linear", "polynomial 3"}
+    assert choice.scores["prior alone"]["mean"] > 10 * choice.scores[choice.chosen]["mean"]
+
+
+def test_an_exact_prior_wins_against_every_library(helpers):
+    t = np.arange(2501) * 0.01
+    x = helpers.integrate(oscillator, [2.0, 0.0], t)
+    x = x + 0.05 * np.random.default_rng(1).standard_normal(x.shape)
+    candidates = {"polynomial 3": dc.PolynomialLibrary(3),
+                  "fourier": dc.FourierLibrary(2)}
+    choice = dc.choose_procedure(dc.DiscrepancyModel(prior=oscillator), x, t=0.01,
+                                 candidates=candidates, progress=False)
+    assert choice.model.prior_only_
+    assert choice.scores[choice.chosen]["n_terms"] == 0
+
+
+def test_velocity_like_states_come_from_the_prior():
+    q, v, w = sp.symbols("q v w")
+    assert velocity_states([v, -q, -w], ["q", "v", "w"], None) == ["v"]
+    x = np.random.default_rng(0).standard_normal((50, 3))
+    assert velocity_states(lambda z, u=None: np.c_[z[:, 1], -z[:, 0], -z[:, 2]],
+                           ["q", "v", "w"], x) == ["v"]
+    assert velocity_states(None, ["q", "v"], x[:, :2]) == []
+
+
+def test_hinge_knots_are_quantiles_of_the_data():
+    rng = np.random.default_rng(2)
+    x = np.c_[rng.uniform(0, 10, 1000), rng.normal(size=1000)]
+    libs = default_libraries(["h", "v"], [], x, prior=[sp.Symbol("v"), -sp.Symbol("h")])
+    names = libs["linear + hinges"].fit(["h", "v"]).get_feature_names()
+    for q in (0.25, 0.5, 0.75):
+        knot = float(f"{np.quantile(x[:, 0], q):.3g}")
+        assert any(f"h - {knot:g}" in n for n in names), (knot, names)
+    assert "linear + friction" in libs          # v is the velocity of h here
+    assert list(libs)[:3] == ["linear", "polynomial 2", "polynomial 3"]
+
+
+def test_candidates_are_checked():
+    with pytest.raises(dc.errors.ParameterError, match="candidates"):
+        dc.choose_procedure(dc.DiscrepancyModel(prior=oscillator), np.ones((100, 2)),
+                            candidates={"bad": 3})
+    with pytest.raises(dc.errors.ParameterError, match="n_origins"):
+        dc.choose_procedure(dc.DiscrepancyModel(prior=oscillator), np.ones((100, 2)),
+                            n_origins=1)
+
+
+def test_procedure_figure_has_one_column_per_candidate(friction_records):
+    pytest.importorskip("matplotlib")
+    from discrepancy.plots.selection import procedure_figure
+
+    candidates = {"linear": dc.PolynomialLibrary(1), "cubic": dc.PolynomialLibrary(3)}
+    xs, us = friction_records
+    choice = dc.choose_procedure(dc.DiscrepancyModel(prior=forced_oscillator), xs, t=0.01,
+                                 u=us, candidates=candidates, progress=False)
+    fig = procedure_figure(choice)
+    labels = [tick.get_text() for tick in fig.axes[0].get_xticklabels()]
+    assert [label.split("\n")[0] for label in labels] == ["prior alone", "linear", "cubic"]

@@ -1,0 +1,154 @@
+"""The default selection by forecasts, against systems whose discrepancy is known: exact
+priors give the prior alone, a weak missing damping is found, chaotic systems and maps
+work; streamed and Dask fits choose what the in-memory fit chooses."""
+import warnings
+
+import numpy as np
+import pytest
+
+import discrepancy as dc
+from discrepancy.errors import PriorOnlyWarning
+
+NOISE = 0.1      # 10x the paper's
+
+
+def duffing(c=0.0):
+    return lambda x, u=None: np.stack([x[..., 1], -x[..., 0] - x[..., 0] ** 3 - c * x[..., 1]],
+                                      axis=-1)
+
+
+@pytest.fixture(scope="module")
+def damped(helpers):
+    t = np.arange(2501) * 0.01
+    return t, helpers.integrate(duffing(0.1), [1.5, 0.0], t)
+
+
+def active(model):
+    names = model.get_feature_names()
+    return {(model.state_names_[i], names[j]) for i, j in zip(*np.nonzero(model.coef_),
+                                                              strict=True)}
+
+
+def fit(prior, x, **kw):
+    return dc.DiscrepancyModel(prior=prior, feature_library=dc.PolynomialLibrary(3),
+                               **kw).fit(x, t=0.01)
+
+
+def test_exact_prior_gives_the_prior_alone_and_says_so(damped, helpers):
+    t = damped[0]
+    x = helpers.integrate(duffing(), [1.5, 0.0], t)
+    for seed in range(4):
+        noisy = x + NOISE * np.random.default_rng(seed).standard_normal(x.shape)
+        with pytest.warns(PriorOnlyWarning, match="prior alone"):
+            model = fit(duffing(), noisy)
+        assert model.prior_only_ and not np.any(model.coef_)
+        sel = model.forecast_selection_
+        assert sel.prior_only and sel.n_terms[sel.chosen] == 0
+
+
+def test_weak_damping_the_prior_lacks_is_found(damped):
+    t, x = damped
+    for seed in range(4):
+        noisy = x + NOISE * np.random.default_rng(seed).standard_normal(x.shape)
+        model = fit(duffing(), noisy)
+        assert active(model) == {("x2", "x2")}
+        assert model.coef_[1, model.get_feature_names().index("x2")] == pytest.approx(
+            -0.1, rel=0.2)
+        assert not model.prior_only_
+
+
+def test_old_choice_stays_available_and_explicit_optimizers_are_used_as_given(damped,
+                                                                              helpers):
+    t, x = damped
+    noisy = x + NOISE * np.random.default_rng(0).standard_normal(x.shape)
+    for model in (fit(duffing(), noisy, selection="optimizer"),
+                  fit(duffing(), noisy, optimizer=dc.STLSQ(threshold=0.05))):
+        assert model.forecast_selection_ is None
+    with pytest.warns(PriorOnlyWarning):       # a noise-fitting fixed threshold vs the prior
+        model = fit(duffing(0.0), helpers.integrate(duffing(), [1.5, 0.0], t) + noisy - x,
+                    optimizer=dc.STLSQ(threshold=1e-3), selection="forecast")
+    assert model.prior_only_
+    assert model.forecast_selection_.labels == ["equation error", "prior alone"]
+
+
+def test_chaotic_system_is_scored_where_forecasts_still_mean_something(lorenz_data, helpers):
+    """Lorenz with the prior's rho 20 (truth 28): the correction 8 x1 in the second
+    equation; windows are cut where the reference forecast's sensitivity to its start
+    saturates (chaos), and the exact prior is the prior alone."""
+    x = lorenz_data.x + 0.05 * np.random.default_rng(1).standard_normal(lorenz_data.x.shape)
+    model = dc.DiscrepancyModel(prior=lambda x, u=None: helpers.lorenz_rhs(x, rho=20.0),
+                                feature_library=dc.PolynomialLibrary(2)).fit(
+        x, t=lorenz_data.dt)
+    assert active(model) == {("x2", "x1")}
+    assert model.coef_[1, model.get_feature_names().index("x1")] == pytest.approx(8, rel=0.02)
+    sel = model.forecast_selection_
+    long_enough = [w for w in model.statistics_.held_out.complete() if w.lead >= sel.horizon]
+    assert min(sel.window_leads) < sel.horizon or sel.n_windows < len(long_enough)
+    with pytest.warns(PriorOnlyWarning):
+        exact = dc.DiscrepancyModel(prior=helpers.lorenz_rhs,
+                                    feature_library=dc.PolynomialLibrary(2)).fit(
+            x, t=lorenz_data.dt)
+    assert exact.prior_only_
+
+
+def test_maps_choose_by_iterated_forecasts():
+    """x[k+1] = 0.998 R x[k] (R a rotation); the prior R x misses the contraction."""
+    c, s = np.cos(0.2), np.sin(0.2)
+    rotation = np.array([[c, -s], [s, c]])
+    x = np.empty((1000, 2))
+    x[0] = [2.0, 0.0]
+    for k in range(999):
+        x[k + 1] = 0.998 * rotation @ x[k]
+    noisy = x + 0.002 * np.random.default_rng(0).standard_normal(x.shape)
+    model = dc.DiscrepancyModel(prior=lambda z, u=None: z @ rotation.T, discrete_time=True,
+                                feature_library=dc.PolynomialLibrary(2)).fit(noisy)
+    names = model.get_feature_names()
+    assert active(model) <= {(a, b) for a in ("x1", "x2") for b in ("x1", "x2")}
+    np.testing.assert_allclose(model.coef_[:, [names.index("x1"), names.index("x2")]],
+                               -0.002 * rotation, atol=3e-4)
+    with pytest.warns(PriorOnlyWarning):
+        exact = dc.DiscrepancyModel(prior=lambda z, u=None: 0.998 * z @ rotation.T,
+                                    discrete_time=True,
+                                    feature_library=dc.PolynomialLibrary(2)).fit(noisy)
+    assert exact.prior_only_
+
+
+def test_streamed_and_dask_fits_choose_what_the_in_memory_fit_chooses(damped):
+    da = pytest.importorskip("dask.array")
+    t, x = damped
+    noisy = x + NOISE * np.random.default_rng(2).standard_normal(x.shape)
+
+    def model():
+        return dc.DiscrepancyModel(prior=duffing(), feature_library=dc.PolynomialLibrary(3),
+                                   differentiation_method=dc.SavitzkyGolay(101, 5))
+
+    whole = model().fit(noisy, t=0.01)
+    chunks = model().fit(iter([noisy[i:i + 333] for i in range(0, len(noisy), 333)]), t=0.01)
+    dask = model().fit(da.from_array(noisy, chunks=700), t=0.01)
+    for other in (chunks, dask):
+        np.testing.assert_allclose(other.coef_, whole.coef_, rtol=1e-10, atol=1e-14)
+        np.testing.assert_allclose(other.forecast_selection_.score,
+                                   whole.forecast_selection_.score, rtol=1e-8)
+        np.testing.assert_array_equal(other.region_.low, whole.region_.low)
+    assert active(whole) == {("x2", "x2")}
+
+
+def test_fit_statistics_keeps_the_choice_of_the_fit(damped):
+    """make_setup -> statistics per trajectory -> fit_statistics carries the forecast
+    windows along with the sums, so it chooses as fit does."""
+    from discrepancy.data import as_trajectories
+
+    t, x = damped
+    noisy = x + NOISE * np.random.default_rng(3).standard_normal(x.shape)
+    parts = [noisy[:1300], noisy[1300:]]
+    model = dc.DiscrepancyModel(prior=duffing(), feature_library=dc.PolynomialLibrary(3),
+                                differentiation_method=dc.SavitzkyGolay(101, 5))
+    setup = model.make_setup(2, 0)
+    stats = setup.new_statistics()
+    for tr in as_trajectories(parts, 0.01):
+        stats += setup.statistics(tr)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model.fit_statistics(stats, setup)
+    assert model.forecast_selection_ is not None
+    assert active(model) == {("x2", "x2")}
