@@ -88,6 +88,12 @@ class ConvergenceWarning(UserWarning):
     """An iterative solver stopped at its iteration limit; its last iterate is used."""
 
 
+class InitialStateWarning(UserWarning):
+    """Even the best of several starts fits the measured outputs poorly: the estimated
+    initial state (and a simulation from it) should not be trusted. The message gives the
+    RMS error relative to the outputs' spread."""
+
+
 class CoarseSamplingWarning(UserWarning):
     """The data have too few samples per period for the chosen differentiation method."""
 

@@ -18,8 +18,16 @@ _COMMON = """
                 initial state is estimated, within ``x0_bounds`` = ``(lower, upper)``
                 (numbers or one per state) when given (e.g. levels that cannot be negative).
             u_hold: the input between samples (``"linear"``, ``"zoh"``, ``"bandlimited"``).
-            substeps: RK4 steps per sample interval (simulate the result with the same
-                ``method="rk4"``, ``substeps`` and ``u_hold``)."""
+            substeps: RK4 steps per sample interval, a positive integer (simulate the
+                result with the same ``method="rk4"``, ``substeps`` and ``u_hold``); a
+                value whose stage inputs would not fit in memory is refused.
+            segment_length: samples per multiple-shooting segment (``"auto"``: 128); each
+                segment is simulated from a state of its own and the fit makes them meet.
+            n_jobs: threads that run the segments (``None``: two on records of 20,000
+                samples or more, else one).
+            jit: compile the simulation and its sensitivities to C (``"auto"``: when a C
+                compiler is found and the work saved exceeds the compile time; compiled
+                code is cached on disk, see :mod:`discrepancy.models.compiled`)."""
 
 
 class OutputErrorMethods:
@@ -28,7 +36,8 @@ class OutputErrorMethods:
     def fit_outputs(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
                     u_hold: str = "linear", substeps: int = 4, max_terms: int | None = None,
                     holdout: float = 0.25, tolerance: float | None = None,
-                    progress: bool | None = None):
+                    progress: bool | None = None, segment_length: int | str = "auto",
+                    n_jobs: int | None = None, jit: bool | str = "auto"):
         """Learn the discrepancy from measured outputs when some states are not measured
         (output error: the simulation of ``f_m + g`` from estimated initial states, with the
         measured input, is fitted to the recorded outputs). Needs CasADi (``[control]``).
@@ -44,9 +53,12 @@ class OutputErrorMethods:
                 ``state_names``, a sympy prior or ``x0``.
 
         After the fit, ``x0_`` holds the estimated initial states, ``output_selection_``
-        the scored supports, ``output_error_`` the scaled RMS output error of the fit and
-        ``uncertainty_`` the coefficients' uncertainty (a Gauss–Newton sandwich over blocks
-        of samples, as draws: ``model.print(uncertainty=model.uncertainty_)``).
+        the scored supports, ``output_error_`` the scaled RMS output error of the fit,
+        ``output_scale_`` the outputs' spread it is scaled by (``(k,)``, their standard
+        deviations) and ``uncertainty_`` the coefficients' uncertainty (a Gauss–Newton
+        sandwich over blocks of samples, as draws:
+        ``model.print(uncertainty=model.uncertainty_)``). Unmeasured initial states are
+        fitted from several starts (see :meth:`estimate_initial_state`).
         """
         keywords_only("fit_outputs", args, "u, outputs and the options")
         from .output_fit import fit_outputs
@@ -55,14 +67,15 @@ class OutputErrorMethods:
         setup, coef, x0s, fit, path, error = fit_outputs(
             self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
             substeps=substeps, max_terms=max_terms, holdout=holdout, tolerance=tolerance,
-            progress=progress)
+            progress=progress, segment_length=segment_length, n_jobs=n_jobs, jit=jit)
         self._set_fit(setup, coef, None, None)
         self._keep_outputs(y, x0s, fit, error)
         self.output_selection_ = path
         return self
 
     def refine(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
-               u_hold: str = "linear", substeps: int = 4):
+               u_hold: str = "linear", substeps: int = 4, segment_length: int | str = "auto",
+               n_jobs: int | None = None, jit: bool | str = "auto"):
         """Refit the nonzero coefficients of a fitted model (and the initial states) by
         output error on measured outputs, keeping its terms: e.g. after a derivative-based
         fit whose derivatives were noisy or whose velocities were estimated. Sets ``x0_``,
@@ -76,17 +89,25 @@ class OutputErrorMethods:
 
         coef, x0s, fit = refit_outputs(self, y, t, u, outputs=outputs, x0=x0,
                                        x0_bounds=x0_bounds, u_hold=u_hold,
-                                       substeps=substeps, coefficients=True)
+                                       substeps=substeps, coefficients=True,
+                                       segment_length=segment_length, n_jobs=n_jobs, jit=jit)
         self._set_fit(self.setup_, coef, self.optimizer_, self.statistics_)
         self._keep_outputs(y, x0s, fit, fit.error(coef, x0s, [np.ones(r.m, bool)
                                                                for r in fit.records]))
         return self
 
     def estimate_initial_state(self, y, t=None, *args, u=None, outputs=None, x0=None,
-                               x0_bounds=None, u_hold: str = "linear", substeps: int = 4):
+                               x0_bounds=None, u_hold: str = "linear", substeps: int = 4,
+                               segment_length: int | str = "auto", n_jobs: int | None = None,
+                               jit: bool | str = "auto"):
         """The initial state ``(n,)`` (a list for a list of records) that makes the fitted
         model's simulation best match measured outputs (e.g. the first samples of a test
-        record); the model is unchanged.
+        record); the model is unchanged. The state is fitted from several starts (``x0``
+        and the model's ``x0_`` when there are, the measured states, the unmeasured ones
+        at either sign of the outputs' size, inverses of an output map, the model's
+        steady state) and the best fit kept; when even that fits the outputs with an RMS
+        error above a quarter of their spread, :class:`~discrepancy.errors.InitialStateWarning`
+        says how poorly.
 
         Args:{common}
         """
@@ -95,7 +116,8 @@ class OutputErrorMethods:
         from .output_fit import refit_outputs
 
         _, x0s, _ = refit_outputs(self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds,
-                                  u_hold=u_hold, substeps=substeps, coefficients=False)
+                                  u_hold=u_hold, substeps=substeps, coefficients=False,
+                                  segment_length=segment_length, n_jobs=n_jobs, jit=jit)
         return list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
 
     def _keep_outputs(self, y, x0s, fit, error):
@@ -104,6 +126,7 @@ class OutputErrorMethods:
         self.x0_ = list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
         self.output_error_ = error
         self.output_names_ = list(fit.out_map.names)
+        self.output_scale_ = fit.y_scale.copy()
         self.uncertainty_ = sandwich_uncertainty(self, fit.covariance,
                                                  fit.covariance_blocks - 1)
 

@@ -1,0 +1,323 @@
+"""Levenberg–Marquardt for multiple shooting: least squares with continuity constraints.
+
+The problem: ``min ½ ||r(s, θ)||²`` over segment states ``s_1 .. s_N`` (``n`` each) and
+shared parameters ``θ`` (``q``), subject to ``F_i(s_i, θ) = s_{i+1}`` for every linked
+segment ``i`` (the end of a segment meets the start of the next) and box bounds on some
+states. Residuals of segment ``i`` depend on ``s_i`` and ``θ`` only, so ``JᵀJ`` is block
+diagonal in the states with a border for ``θ``, and the constraints are banded: each step
+solves the sparse KKT system of the linearised, damped problem
+
+    [JᵀJ + μD   Gᵀ] [Δ]   [-Jᵀr]
+    [G          0 ] [λ] = [-d  ]         (d: the defects F_i - s_{i+1}, G: their Jacobian)
+
+with SuperLU (scipy) in ``O(N (n + q)²)`` memory, never a dense ``N n × N n`` matrix. A step
+is accepted by a filter (Fletcher and Leyffer: it must lower the cost or the defects; an
+Armijo decrease of the cost when the step is mainly about the cost), and the damping ``μ``
+follows Nielsen's rule on the cost's actual over predicted decrease (``D`` = the diagonal
+of ``JᵀJ``: invariant to the variables' scales, like MINPACK). At a solution the defects
+vanish, so the answer is a stationary point of single shooting's objective; the segments
+only change the path there (and, being short, keep the linearisation good far from it).
+
+Problems provide ``evaluate(states (N, n), theta (q,)) -> Evaluation`` (a
+:class:`Evaluation`); :func:`solve` needs nothing else. Written here because scipy's
+``least_squares`` has no equality constraints and its dense ``trf`` would factor the whole
+``N n + q`` Jacobian; CasADi's NLP solvers would need the record's whole graph.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse
+import scipy.sparse.linalg
+
+#: a step that would cross a bound goes this share of the way to it
+INTERIOR = 0.995
+#: damping of the Gauss–Newton step that tests for a stationary point (keeps the system
+#: regular where some state does not move the outputs, e.g. beyond a kink)
+STATIONARY_DAMPING = 1e-9
+
+
+@dataclass
+class Evaluation:
+    """Everything one step needs at a point, for ``N`` segments, ``n`` states, ``q``
+    parameters (``cost = ||r||²``; ``inf`` when the model diverged).
+
+    ``h_ss`` ``(N, n, n)``, ``h_sp`` ``(N, n, q)``, ``h_pp`` ``(q, q)``: blocks of ``JᵀJ``;
+    ``g_s`` ``(N, n)``, ``g_p`` ``(q,)``: of ``Jᵀr``; ``ends`` ``(N, n)``: ``F_i`` (rows of
+    unlinked segments unused), ``a`` ``(N, n, n)``, ``b`` ``(N, n, q)``: their Jacobians."""
+
+    cost: float
+    h_ss: np.ndarray | None = None
+    h_sp: np.ndarray | None = None
+    h_pp: np.ndarray | None = None
+    g_s: np.ndarray | None = None
+    g_p: np.ndarray | None = None
+    ends: np.ndarray | None = None
+    a: np.ndarray | None = None
+    b: np.ndarray | None = None
+
+
+@dataclass
+class Result:
+    """The solution: ``states`` ``(N, n)``, ``theta`` ``(q,)``, ``cost`` ``||r||²``, the
+    largest scaled defect, the evaluations used and whether the tolerances were met."""
+
+    states: np.ndarray
+    theta: np.ndarray
+    cost: float
+    defect: float
+    evaluations: int
+    converged: bool
+
+
+def solve(evaluate, states, theta, links, *, state_scale, lower=None, upper=None,
+          max_evaluations: int = 200, ftol: float = 1e-12, xtol_f: float = 1e-10,
+          xtol: float = 1e-10, dtol: float = 1e-9) -> Result:
+    """Minimise from ``states`` ``(N, n)`` and ``theta`` ``(q,)``.
+
+    Args:
+        evaluate: ``(states, theta) -> Evaluation``.
+        links: ``(N,)`` bool, segment ``i``'s end must equal segment ``i + 1``'s start.
+        state_scale: ``(n,)`` typical size of each state (for the defects' tolerance).
+        lower, upper: ``(N, n)`` bounds on the states (``±inf`` where free).
+        max_evaluations: evaluations allowed (each runs the model with sensitivities).
+        ftol, dtol: converged when the undamped Gauss–Newton step predicts a relative
+            decrease of the cost below ``ftol`` and every scaled defect is below ``dtol``;
+        xtol_f, xtol: or (as scipy's ``least_squares`` does, for models whose Gauss–Newton
+            model stays poor, e.g. at a kink) when an accepted step that did at least a
+            quarter of what it predicted lowered the cost by less than ``xtol_f``
+            (relative), or moved the variables by less than ``xtol`` (relative).
+    """
+    search = _Search(evaluate, np.array(states, dtype=float), np.array(theta, dtype=float),
+                     links, state_scale, lower, upper)
+    converged = False
+    while np.isfinite(search.here.cost) and search.used < max_evaluations:
+        system = search.system()
+        if search.infeasibility.largest(search.here, search.states) <= dtol and \
+                abs(search.predicted(system, STATIONARY_DAMPING, approach=1.0)[0]) <= \
+                ftol * 0.5 * search.here.cost:
+            converged = True
+            break
+        if not search.try_step(system):
+            break
+        if search.settled(ftol=xtol_f, xtol=xtol) and \
+                search.infeasibility.largest(search.here, search.states) <= dtol:
+            converged = True
+            break
+    here = search.here
+    defect = search.infeasibility.largest(here, search.states) if np.isfinite(here.cost) \
+        else np.inf
+    return Result(search.states, search.theta, float(here.cost), defect, search.used,
+                  converged)
+
+
+class _Search:
+    """The iterate, its evaluation and the damping of a Levenberg–Marquardt search."""
+
+    def __init__(self, evaluate, states, theta, links, state_scale, lower, upper):
+        self.evaluate, self.links = evaluate, links
+        n_seg = len(states)
+        self.lower = np.full_like(states, -np.inf) if lower is None else lower
+        self.upper = np.full_like(states, np.inf) if upper is None else upper
+        self.lo = np.concatenate([self.lower.ravel(), np.full(theta.size, -np.inf)])
+        self.hi = np.concatenate([self.upper.ravel(), np.full(theta.size, np.inf)])
+        self.states = strictly_inside(states, self.lower, self.upper)
+        self.theta = theta
+        self.here = evaluate(self.states, theta)
+        self.used, self.mu, self.nu = 1, 1e-3, 2.0
+        self.last = None            # (relative decrease, ratio, relative step) of the last
+        self.infeasibility = _Infeasibility(links, state_scale)
+        self.filter = _Filter(max(10 * self.infeasibility(self.here, self.states),
+                                  float(n_seg)))
+
+    def system(self):
+        h, g, G = _assemble(self.here, self.links)
+        d = _defects(self.here, self.states, self.links)[np.flatnonzero(self.links[:-1])]
+        return h, g, G, d.ravel(), np.concatenate([self.states.ravel(), self.theta])
+
+    def predicted(self, system, mu, approach=None):
+        """``(predicted decrease of the cost, step)`` of the step damped by ``mu`` (with
+        ``approach=1``, variables that would cross a bound stop on it: the decrease left
+        inside the bounds)."""
+        h, g, G, d, x = system
+        step = _kkt_step(h, g, G, d, mu, x, self.lo, self.hi,
+                         INTERIOR if approach is None else approach)
+        if step is None:
+            return np.inf, None
+        return -(g @ step + 0.5 * step @ (h @ step)), step
+
+    def try_step(self, system) -> bool:
+        """One damped step, accepted or not; False when no step can be made."""
+        predicted, step = self.predicted(system, self.mu)
+        if step is None:
+            return False
+        n_seg, n = self.states.shape
+        states = strictly_inside(self.states + step[:n_seg * n].reshape(n_seg, n),
+                                 self.lower, self.upper)
+        theta = self.theta + step[n_seg * n:]
+        trial = self.evaluate(states, theta)
+        self.used += 1
+        f, f_trial = 0.5 * self.here.cost, 0.5 * trial.cost
+        v = self.infeasibility(self.here, self.states)
+        v_trial = self.infeasibility(trial, states)
+        objective_step = predicted > 0 and predicted >= v ** 1.1
+        ok = np.isfinite(f_trial) and np.isfinite(v_trial) and \
+            self.filter.admits(v_trial, f_trial, v, f)
+        if ok and objective_step:
+            ok = f - f_trial >= 1e-4 * predicted            # Armijo on the cost
+        if not ok:
+            self.mu, self.nu = self.mu * self.nu, self.nu * 2.0
+            self.last = None
+            return self.mu < 1e16
+        if not objective_step:
+            self.filter.add(v, f)
+        ratio = min(max((f - f_trial) / predicted, 0.0), 1.0) if predicted > 0 else 0.0
+        self.mu *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)      # Nielsen's rule
+        self.nu = 2.0
+        x = system[4]
+        size = np.abs(np.concatenate([states.ravel(), theta]) - x).max(initial=0.0)
+        self.last = ((f - f_trial) / max(f, 1e-300), ratio,
+                     size / max(np.abs(x).max(initial=0.0), 1e-300))
+        self.states, self.theta, self.here = states, theta, trial
+        return True
+
+    def settled(self, *, ftol, xtol) -> bool:
+        """The last step was accepted and changed little (see :func:`solve`)."""
+        if self.last is None:
+            return False
+        decrease, ratio, size = self.last
+        return (decrease < ftol and ratio > 0.25) or size < xtol
+
+
+def strictly_inside(x, lower, upper, margin: float = 1e-10):
+    """``x`` moved inside ``[lower, upper]`` by ``margin`` of the bound's size where it is on
+    or beyond a (finite) bound."""
+    with np.errstate(invalid="ignore"):
+        low = np.where(np.isfinite(lower), lower + margin * np.maximum(1.0, np.abs(lower)),
+                       lower)
+        high = np.where(np.isfinite(upper), upper - margin * np.maximum(1.0, np.abs(upper)),
+                        upper)
+    return np.clip(x, np.minimum(low, high), np.maximum(low, high))
+
+
+class _Infeasibility:
+    """Sum (and largest) of the defects scaled by the states' sizes."""
+
+    def __init__(self, links, state_scale):
+        self.links, self.scale = links, state_scale
+
+    def __call__(self, ev, states) -> float:
+        return float(np.sum(np.abs(_defects(ev, states, self.links)) / self.scale))
+
+    def largest(self, ev, states) -> float:
+        return float(np.max(np.abs(_defects(ev, states, self.links)) / self.scale,
+                            initial=0.0))
+
+
+class _Filter:
+    """Fletcher and Leyffer's filter: a trial is acceptable when it improves either the
+    cost or the infeasibility over every point kept (and the current one) by a margin,
+    and its infeasibility stays below a ceiling. Unlike an exact penalty, it does not
+    reject the full steps near a solution whose new, second-order defects are of the
+    size of the cost's decrease (the Maratos effect), which kept Levenberg–Marquardt's
+    damping high and its convergence linear."""
+
+    MARGIN = 1e-5
+
+    def __init__(self, ceiling: float):
+        self.ceiling, self.entries = ceiling, []
+
+    def admits(self, v, f, v_here, f_here) -> bool:
+        if v > self.ceiling:
+            return False
+        return all(v <= (1 - self.MARGIN) * v_j or f <= f_j - self.MARGIN * v_j
+                   for v_j, f_j in [*self.entries, (v_here, f_here)])
+
+    def add(self, v, f):
+        self.entries.append((v, f))
+
+
+def _defects(ev: Evaluation, states, links) -> np.ndarray:
+    """``(N, n)``: ``F_i - s_{i+1}`` where linked, else 0."""
+    if ev.ends is None:
+        return np.full_like(states, np.inf)
+    out = np.zeros_like(states)
+    out[:-1] = np.where(links[:-1, None], ev.ends[:-1] - states[1:], 0.0)
+    return out
+
+
+def _assemble(ev: Evaluation, links):
+    """``JᵀJ`` (sparse), ``Jᵀr`` and the constraint Jacobian ``G`` (rows of linked
+    segments, ``n`` each)."""
+    n_seg, n = ev.g_s.shape
+    q = ev.g_p.size
+    size = n_seg * n + q
+    base = np.arange(n_seg)[:, None, None] * n
+    ii = np.arange(n)
+    rows = [(base + ii[:, None]).repeat(n, 2).ravel()]
+    cols = [(base + ii[None, :]).repeat(n, 1).ravel()]
+    vals = [ev.h_ss.ravel()]
+    if q:
+        r_sp = (base + ii[:, None]).repeat(q, 2)
+        c_sp = np.broadcast_to(n_seg * n + np.arange(q), r_sp.shape)
+        rows += [r_sp.ravel(), c_sp.ravel()]
+        cols += [c_sp.ravel(), r_sp.ravel()]
+        vals += [ev.h_sp.ravel(), ev.h_sp.ravel()]
+        pp = n_seg * n + np.arange(q)
+        rows.append(np.repeat(pp, q))
+        cols.append(np.tile(pp, q))
+        vals.append(ev.h_pp.ravel())
+    h = scipy.sparse.csr_matrix((np.concatenate(vals), (np.concatenate(rows),
+                                                         np.concatenate(cols))),
+                                shape=(size, size))
+    g = np.concatenate([ev.g_s.ravel(), ev.g_p])
+    linked = np.flatnonzero(links[:-1])
+    m = len(linked)
+    row = np.arange(m)[:, None, None] * n + ii[None, :, None]            # (m, n, 1)
+    parts_r = [np.broadcast_to(row, (m, n, n)).ravel(), (np.arange(m)[:, None] * n + ii).ravel()]
+    parts_c = [np.broadcast_to(linked[:, None, None] * n + ii[None, None, :], (m, n, n)).ravel(),
+               ((linked + 1)[:, None] * n + ii).ravel()]
+    parts_v = [ev.a[linked].ravel(), -np.ones(m * n)]
+    if q:
+        parts_r.append(np.broadcast_to(row, (m, n, q)).ravel())
+        parts_c.append(np.broadcast_to(n_seg * n + np.arange(q), (m, n, q)).ravel())
+        parts_v.append(ev.b[linked].ravel())
+    G = scipy.sparse.csr_matrix((np.concatenate(parts_v), (np.concatenate(parts_r),
+                                                            np.concatenate(parts_c))),
+                                shape=(m * n, size))
+    return h, g, G
+
+
+def _kkt_step(h, g, G, d_linked, mu, x, lo, hi, approach=None):
+    """The damped step ``Δ`` from ``x`` (``None`` when the system is singular); bounds
+    met by pinning each variable a step would push across its bound at ``approach``
+    (default :data:`INTERIOR`) of the way there, and solving again (iterates stay strictly
+    inside, as in scipy's ``trf``: a model can have an infinite slope on a bound, such as
+    ``sqrt`` at 0)."""
+    size = h.shape[0]
+    diag = h.diagonal()
+    floor = 1e-12 * max(float(diag.max(initial=0.0)), 1e-300)
+    damped = h + scipy.sparse.diags(mu * np.maximum(diag, floor))
+    target = np.full(size, np.nan)                 # pinned steps (to the bound)
+    for _ in range(int(np.isfinite(lo).sum() + np.isfinite(hi).sum()) + 1):
+        index = np.flatnonzero(np.isfinite(target))
+        P = scipy.sparse.csr_matrix((np.ones(len(index)), (np.arange(len(index)), index)),
+                                    shape=(len(index), size))
+        K = scipy.sparse.bmat([[damped, G.T, P.T], [G, None, None], [P, None, None]],
+                              format="csc")
+        rhs = np.concatenate([-g, -d_linked, target[index]])
+        try:
+            sol = scipy.sparse.linalg.splu(K).solve(rhs)
+        except RuntimeError:                       # singular: no step from here
+            return None
+        if not np.all(np.isfinite(sol)):
+            return None
+        step = sol[:size]
+        above, below = x + step > hi, x + step < lo
+        crossing = np.isnan(target) & (above | below)
+        if not crossing.any():
+            return step
+        share = INTERIOR if approach is None else approach
+        target[crossing] = share * (np.where(above, hi, lo)[crossing] - x[crossing])
+    return None
