@@ -33,6 +33,8 @@ import scipy.sparse.linalg
 
 #: a step that would cross a bound goes this share of the way to it
 INTERIOR = 0.995
+#: KKT systems up to this size are solved dense (LAPACK), larger ones by SuperLU
+DENSE_SIZE = 300
 #: damping of the Gauss–Newton step that tests for a stationary point (keeps the system
 #: regular where some state does not move the outputs, e.g. beyond a kink)
 STATIONARY_DAMPING = 1e-9
@@ -308,8 +310,9 @@ def _kkt_step(h, g, G, d_linked, mu, x, lo, hi, approach=None):
                               format="csc")
         rhs = np.concatenate([-g, -d_linked, target[index]])
         try:
-            sol = scipy.sparse.linalg.splu(K).solve(rhs)
-        except RuntimeError:                       # singular: no step from here
+            sol = np.linalg.solve(K.toarray(), rhs) if K.shape[0] <= DENSE_SIZE else \
+                scipy.sparse.linalg.splu(K).solve(rhs)
+        except (RuntimeError, np.linalg.LinAlgError):      # singular: no step from here
             return None
         if not np.all(np.isfinite(sol)):
             return None

@@ -96,12 +96,13 @@ class OutputErrorFit:
     def solve(self, support, coef, x0s, rows, ridge, *, max_evaluations: int = 200,
               starts=None) -> Solution:
         """Least squares of ``support`` from ``coef`` ``(n, p)`` and ``x0s``, or from the
-        segment ``starts`` of an earlier solution on the same ``rows``."""
+        segment ``starts`` of an earlier solution on the same ``rows`` (``"measured"``:
+        segments start from the measured states, see :meth:`segment_starts`)."""
         index = np.flatnonzero(support.ravel())
         lay = self.layout(rows)
         params = self.parameters if len(index) else self.parameters[:0]
-        if starts is None or len(starts) != lay.count:
-            starts = self.segment_starts(lay, coef, x0s)
+        if isinstance(starts, str) or starts is None or len(starts) != lay.count:
+            starts = self.segment_starts(lay, coef, x0s, measured=isinstance(starts, str))
         first = lay.first_segments()
         starts = starts.copy()
         starts[first] = np.clip(x0s, *self.bounds)
@@ -119,9 +120,12 @@ class OutputErrorFit:
         return Solution(coef, result.states[first].copy(), result.cost, result.states,
                         result.converged)
 
-    def segment_starts(self, lay, coef, x0s) -> np.ndarray:
+    def segment_starts(self, lay, coef, x0s, *, measured: bool = False) -> np.ndarray:
         """Segment states from simulating each record from its initial state; where the
-        simulation diverged, the measured states of the sample (the others 0)."""
+        simulation diverged, the measured states of the sample (the others 0). With
+        ``measured``, every segment after a record's first starts from the measured
+        states of its sample (the unmeasured ones from the simulation): the classic start
+        of multiple shooting, close to the data wherever the model is still wrong."""
         starts = np.empty((lay.count, self.n))
         for i, record in enumerate(self.records):
             mine = lay.starts_of(i)
@@ -132,6 +136,8 @@ class OutputErrorFit:
             bad = ~np.all(np.isfinite(chosen), axis=1)
             for j in np.flatnonzero(bad):
                 chosen[j] = self.out_map.initial_guess(record.y[lay.first[mine[j]]])
+            for j in range(1, len(mine)) if measured else ():
+                chosen[j] = self.out_map.states_from(record.y[lay.first[mine[j]]], chosen[j])
             starts[mine] = chosen
         return starts
 

@@ -125,7 +125,7 @@ def _allowed(setup) -> np.ndarray:
 def _first_support(fit, start, rows, max_terms):
     """The full allowed library fitted (with a small ridge), cut to ``max_terms``."""
     zero = np.zeros((fit.n, fit.p))
-    solution = fit.solve(fit.allowed, zero, start.x0s, rows, RIDGE, starts=start.starts)
+    solution = fit.solve(fit.allowed, zero, start.x0s, rows, RIDGE, starts="measured")
     support = fit.allowed.copy()
     if max_terms is not None and support.sum() > max_terms:
         order = np.argsort(-fit.importance(solution.coef))
