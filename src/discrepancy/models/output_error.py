@@ -114,6 +114,7 @@ class OutputErrorFit:
                 lambda s, th: self.evaluate(lay, index, params, sup, s, th, ridge), starts,
                 coef.ravel()[index] / self.coef_scale[index], lay.links,
                 state_scale=self.state_scale, lower=lower, upper=upper,
+                continuous=lambda s, th: self.continuous(lay, index, s, th, ridge),
                 max_evaluations=max_evaluations)
         self.evaluations += result.evaluations
         coef = self.coefficients(result.theta, index)
@@ -140,6 +141,28 @@ class OutputErrorFit:
                 chosen[j] = self.out_map.states_from(record.y[lay.first[mine[j]]], chosen[j])
             starts[mine] = chosen
         return starts
+
+    def continuous(self, lay, index, starts, theta, ridge):
+        """``(segment starts, cost)`` of the continuous trajectory of every record from
+        its first segment's state (a plain simulation), for :func:`gauss_newton.solve`."""
+        coef = self.coefficients(theta, index)
+        out, cost = starts.copy(), 0.0
+        total = max(float(lay.weight.sum()) * self.out_map.k, 1.0)
+        for i, record in enumerate(self.records):
+            mine = lay.starts_of(i)
+            end = int(lay.first[mine[-1]] + lay.steps[mine[-1]])
+            stages = record.stages[:end] if record.stages is not None else None
+            states = self.shooting.simulate(starts[mine[0]], stages, record.h[:end], coef)
+            w = np.zeros(end + 1)
+            for j in mine:
+                span = slice(lay.first[j], lay.first[j] + lay.length + 1)
+                w[span] = np.maximum(w[span], lay.weight[j, :len(w[span])])
+            e = (self.out_map(states) - record.y[:end + 1]) / self.y_scale
+            cost += float(np.sum(w[:, None] * e ** 2)) / total
+            out[mine] = states[lay.first[mine]]
+        if ridge and len(index):
+            cost += ridge * float(theta @ theta)
+        return out, (cost if np.isfinite(cost) else np.inf)
 
     def evaluate(self, lay, index, params, sup, starts, theta, ridge):
         """:class:`~discrepancy.models.gauss_newton.Evaluation` at segment ``starts`` and
