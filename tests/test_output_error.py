@@ -181,3 +181,80 @@ def test_a_hidden_predator_with_a_numpy_prior_over_two_records_and_no_guess():
     assert model.complexity == 1
     assert coefficient(model, "pred", "prey pred") == pytest.approx(0.1, rel=0.02)
     np.testing.assert_allclose(model.x0_, [z[0] for z in runs], rtol=0.02)
+
+
+def test_options_are_checked_before_any_work(oscillator):
+    t, u, _, y = oscillator
+    ParameterError, ResourceError = dc.errors.ParameterError, dc.errors.ResourceError
+    for bad in (0, -1, 2.5, True, "4"):
+        with pytest.raises(ParameterError, match="substeps must be a positive integer"):
+            oscillator_model().fit_outputs(y, t=t, u=u, outputs=["pos"], substeps=bad)
+    # stage inputs of 10**5 substeps: 1600 steps x 200001 stages x 8 bytes = 2.56 GB
+    dc.resources.MEMORY_LIMIT = 10**9
+    try:
+        with pytest.raises(ResourceError, match=r"substeps=100000.*2\.56 GB"):
+            oscillator_model().fit_outputs(y, t=t, u=u, outputs=["pos"], substeps=10**5)
+    finally:
+        dc.resources.MEMORY_LIMIT = None
+    for name, bad, match in (("segment_length", 0, "segment_length must be"),
+                             ("segment_length", "long", "segment_length must be"),
+                             ("n_jobs", 0, "n_jobs must be"), ("jit", "yes", "jit must be"),
+                             ("max_terms", 0, "max_terms must be"),
+                             ("holdout", 0.9, "holdout must be")):
+        with pytest.raises(ParameterError, match=match):
+            oscillator_model().fit_outputs(y, t=t, u=u, outputs=["pos"], **{name: bad})
+    fitted = oscillator_model(optimizer=dc.STLSQ(threshold=0.0))
+    fitted.feature_library = dc.CustomLibrary([sp.Symbol("pos", real=True) ** 3])
+    fitted.fit_outputs(y[:200], t=t[:200], u=u[:200], outputs=["pos"])
+    with pytest.raises(ParameterError, match="substeps must be a positive integer"):
+        fitted.refine(y, t=t, u=u, outputs=["pos"], substeps=0)
+    with pytest.raises(ParameterError, match="segment_length must be"):
+        fitted.estimate_initial_state(y[:10], t=t[:10], u=u[:10], outputs=["pos"],
+                                      segment_length=-3)
+
+
+def test_the_answer_does_not_depend_on_the_segments(oscillator):
+    """Segments of 25 samples, of 400 and one segment per record (single shooting): the
+    same terms, coefficients and initial state to the solver's tolerance."""
+    t, u, x, y = oscillator
+    fits = [oscillator_model().fit_outputs(y, t=t, u=u, outputs=["pos"], segment_length=n,
+                                           progress=False) for n in (25, 400, len(t))]
+    for other in fits[1:]:
+        np.testing.assert_array_equal(other.coef_ != 0, fits[0].coef_ != 0)
+        np.testing.assert_allclose(other.coef_, fits[0].coef_, rtol=1e-5, atol=1e-8)
+        np.testing.assert_allclose(other.x0_, fits[0].x0_, rtol=1e-5, atol=1e-7)
+
+
+def fine_rk4(f, x0, t, u, substeps=50):
+    """Classical RK4 with ``substeps`` steps per sample and the input interpolated: the
+    truth for a discontinuous right-hand side (an adaptive solver chatters on sign(v))."""
+    out = [np.asarray(x0, dtype=float)]
+    for k in range(len(t) - 1):
+        z, h = out[-1], (t[k + 1] - t[k]) / substeps
+        for j in range(substeps):
+            a, b, c = (u[k] + (u[k + 1] - u[k]) * (j + s) / substeps for s in (0, 0.5, 1))
+            k1 = f(z, a)
+            k2 = f(z + h / 2 * k1, b)
+            k3 = f(z + h / 2 * k2, b)
+            z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + f(z + h * k3, c))
+        out.append(z)
+    return np.array(out)
+
+
+def test_a_coulomb_friction_prior_and_a_hidden_cubic_spring():
+    """A sign term in the prior (known Coulomb friction 0.3 sign(v)); the velocity is
+    hidden; the cubic spring -0.5 pos^3 is the one term to find."""
+    t = np.arange(2001) * 0.05
+    u = forcing(t, seed=4)
+    x = fine_rk4(lambda z, v: np.array([z[1], -z[0] - 0.2 * z[1] - 0.3 * np.sign(z[1])
+                                        - 0.5 * z[0] ** 3 + v]), [0.5, -0.3], t, u)
+    y = x[:, 0] + 0.01 * np.random.default_rng(5).standard_normal(len(t))
+    pos, vel, u_ = sp.symbols("pos vel u", real=True)
+    model = dc.DiscrepancyModel(prior=[vel, -pos - 0.2 * vel - 0.3 * sp.sign(vel) + u_],
+                                state_names=["pos", "vel"], input_names=["u"],
+                                feature_library=dc.PolynomialLibrary(3, variables=["pos", "vel"]),
+                                constraints=dc.Constraints(exact_equations=["pos"]))
+    model.fit_outputs(y, t=t, u=u, outputs=["pos"], progress=False)
+    assert model.complexity == 1
+    assert coefficient(model, "vel", "pos^3") == pytest.approx(-0.5, rel=0.02)
+    np.testing.assert_allclose(model.x0_, x[0], atol=0.03)

@@ -136,6 +136,94 @@ def rk4_step(f, n_states: int, n_inputs: int, substeps: int, *, n_parameters: in
     return ca.Function("step", [x, stages, h, *extra], [z])
 
 
+def nan_safe(expr):
+    """``expr`` (an SX column) with the same values and derivatives that are 0 instead of
+    NaN where a square root or fractional power meets 0: ``sqrt(max(h, 0))`` for ``h < 0``
+    has the value 0 and, by the chain rule, the derivative ``inf · 0 = NaN``, which would
+    wipe out every other term of the same Jacobian entry. Each ``sqrt(a)`` becomes
+    ``a > 0 ? sqrt(a > 0 ? a : 1) : (a < 0 ? NaN : 0)`` (the double ``where`` that makes
+    the unused branch's derivative finite). Used only to differentiate."""
+    ca = _casadi()
+    done = {}
+
+    def safe(a, power):
+        inside = ca.if_else(a > 0, a, 1)
+        value = ca.sqrt(inside) if power is None else inside ** power
+        return ca.if_else(a > 0, value, ca.if_else(a < 0, np.nan, 0))
+
+    def rebuilt(node):
+        stack = [node]
+        while stack:
+            e = stack[-1]
+            key = e.element_hash()
+            if key in done:
+                stack.pop()
+                continue
+            if e.is_symbolic() or e.is_constant() or not 1 <= e.n_dep() <= 2:
+                done[key] = e
+                stack.pop()
+                continue
+            deps = [e.dep(i) for i in range(e.n_dep())]
+            missing = [d for d in deps if d.element_hash() not in done]
+            if missing:
+                stack.extend(missing)
+                continue
+            args = [done[d.element_hash()] for d in deps]
+            op = e.op()
+            if op == ca.OP_SQRT:
+                done[key] = safe(args[0], None)
+            elif op in (ca.OP_POW, ca.OP_CONSTPOW) and deps[1].is_constant() and \
+                    float(deps[1]) != round(float(deps[1])) and float(deps[1]) > 0:
+                done[key] = safe(args[0], float(deps[1]))
+            elif len(args) == 1:
+                done[key] = ca.SX.unary(op, args[0])
+            else:
+                done[key] = ca.SX.binary(op, args[0], args[1])
+            stack.pop()
+        return done[node.element_hash()]
+
+    return ca.vertcat(*[rebuilt(expr[i]) for i in range(expr.numel())])
+
+
+def rk4_substep(f, n_states: int, n_inputs: int, n_parameters: int):
+    """CasADi Function ``substep(x (n,), U (3 r,), dt, p) -> x_next`` for ``f(x, u, p)``: one
+    classical RK4 step of length ``dt`` with the input at its start, middle and end (``U``
+    column-major: the three values of input 0, then of input 1, ...). The same arithmetic as
+    one substep of :func:`rk4_step`."""
+    ca = _casadi()
+    x, stages, dt = ca.SX.sym("x", n_states), ca.SX.sym("U", 3 * n_inputs), ca.SX.sym("dt")
+    p = ca.SX.sym("p", n_parameters)
+
+    def rhs(z, j):
+        return f(z, ca.vertcat(*[stages[3 * i + j] for i in range(n_inputs)]), p)
+
+    k1 = rhs(x, 0)
+    k2 = rhs(x + dt / 2 * k1, 1)
+    k3 = rhs(x + dt / 2 * k2, 1)
+    k4 = rhs(x + dt * k3, 2)
+    return ca.Function("substep", [x, stages, dt, p], [x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+
+
+def chained_step(substep, n_inputs: int, substeps: int):
+    """``step(z, U (r (2S+1),), h, p) -> z_next``: ``substep`` (any function of ``(z, U3, dt,
+    p)``, e.g. a state with its sensitivities) applied ``S = substeps`` times with
+    ``dt = h / S``, substep ``j`` taking stage values ``2j, 2j+1, 2j+2`` of every input (the
+    layout of :func:`stage_columns`). A loop (CasADi ``mapaccum``), not an unrolled
+    expression, so its size does not grow with ``substeps``."""
+    ca = _casadi()
+    width = 2 * substeps + 1
+    z = ca.MX.sym("z", substep.size1_in(0))
+    stages = ca.MX.sym("U", n_inputs * width)
+    h, p = ca.MX.sym("h"), ca.MX.sym("p", substep.size1_in(3))
+    if n_inputs:
+        table = ca.reshape(stages, width, n_inputs)          # [stage, input]
+        per = ca.horzcat(*[ca.vec(table[2 * j:2 * j + 3, :]) for j in range(substeps)])
+    else:
+        per = ca.MX(0, substeps)
+    out = substep.mapaccum(substeps)(z, per, h / substeps, p)
+    return ca.Function("step", [z, stages, h, p], [out[:, -1]])
+
+
 def stage_columns(stages: np.ndarray) -> np.ndarray:
     """``(k, 2S+1, r)`` stage inputs as the ``(r (2S+1), k)`` matrix :func:`rk4_step` maps over."""
     k = stages.shape[0]
