@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import itertools
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -15,7 +16,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import discrepancy as dc
-from discrepancy.errors import DiscrepancyError
+from discrepancy.errors import DiscrepancyError, IllConditionedWarning
 from discrepancy.symbolic import symbol
 
 FAST = settings(max_examples=60)
@@ -62,7 +63,9 @@ def test_fit_equals_numpy_least_squares_or_refuses(sample, degree, bias):
     model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(degree, include_bias=bias),
                                 optimizer=dc.STLSQ(threshold=0.0, alpha=0.0))
     try:
-        model.fit(x, x_dot=x_dot, sample_weight=weights)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", IllConditionedWarning)
+            model.fit(x, x_dot=x_dot, sample_weight=weights)
     except DiscrepancyError:
         assert refusal(x, x_dot, weights, degree, bias)
         return
@@ -71,6 +74,14 @@ def test_fit_equals_numpy_least_squares_or_refuses(sample, degree, bias):
     root = np.ones(len(x)) if weights is None else np.sqrt(weights)
     a, b = theta * root[:, None], x_dot * root[:, None]
     reference = np.linalg.lstsq(a, b, rcond=None)[0]
+    if any(issubclass(w.category, IllConditionedWarning) for w in caught):
+        # the licensed deviation: the warning must be true of the terms the fit kept
+        support = np.any(model.coef_ != 0, axis=0)
+        kept = a[:, support]
+        norms = np.linalg.norm(kept, axis=0)
+        assert np.all(norms == 0) or np.linalg.cond(kept / np.where(norms > 0, norms, 1)) \
+            ** 2 > dc.models.conditioning.LIMIT / 10
+        return
     residual, best = np.linalg.norm(a @ model.coef_.T - b), np.linalg.norm(a @ reference - b)
     scale = np.linalg.norm(b) + 1e-300
     assert residual <= best + 1e-6 * scale  # the least-squares residual, to rounding

@@ -137,3 +137,10 @@ def short_repr(text, limit: int = 80) -> str:
     """``repr(text)`` for messages, cut to ``limit`` characters."""
     shown = repr(text)
     return shown if len(shown) <= limit else shown[:limit - 3] + "..."
+
+
+class IllConditionedWarning(UserWarning):
+    """The terms a fit kept are nearly collinear on the data (the condition number of their
+    column-scaled Gram matrix is above 1e10): their coefficients, solved from the Gram
+    statistics, are determined only to about ``condition × 1e-16`` relative, and any split
+    between the named terms is arbitrary. The message names the terms and the number."""

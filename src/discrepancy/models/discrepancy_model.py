@@ -26,6 +26,7 @@ from ..optimizers.wrapped import REGRESSOR
 from ..symbolic import compile_numpy, feature_name
 from .arguments import keywords_only, require_t
 from .checks import checked_discrepancy, pairs
+from .conditioning import warn_if_ill_conditioned
 from .output_methods import OutputErrorMethods
 from .prediction_error_methods import PredictionErrorMethods
 from .pysindy_interface import PySINDyInterface
@@ -208,6 +209,8 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         self._set_fit(setup, coef, optimizer, stats)
         self.forecast_selection_ = chosen_by
         self.region_ = region_of(stats.held_out, self.variable_names_)
+        self.conditioning_ = warn_if_ill_conditioned(
+            stats.gram, self.coef_, self.get_feature_names(), self.state_names_, stacklevel=4)
         announce(self, chosen_by)
         return self
 
