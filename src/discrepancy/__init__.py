@@ -12,6 +12,7 @@ Quick start::
 from . import errors, io, metrics, systems
 from ._version import __version__  # noqa: F401
 from .data.chunks import Chunk
+from .data.fields import Grid
 from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
 from .differentiation import (
     AutoSmoothing,
@@ -25,10 +26,12 @@ from .differentiation import (
     TrendFiltered,
     WeakForm,
 )
+from .differentiation.spatial import SpatialFiniteDifference, SpatialSavitzkyGolay, SpatialSpectral
 from .energy import DissipationDiscrepancy, EnergyDiscrepancy
-from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
+from .libraries import CustomLibrary, FourierLibrary, PDELibrary, PolynomialLibrary
 from .models import Constraints, DiscrepancyModel, load_model
 from .optimizers import SR3, STLSQ, GramStatistics, Lasso
+from .pde import FieldSource, FieldWeakForm, PDEDiscrepancyModel
 
 __all__ = [
     "AutoSmoothing", "CSVFiles", "Chunk", "Constraints", "CustomLibrary", "Dequantised",
@@ -37,4 +40,6 @@ __all__ = [
     "PolynomialLibrary", "SR3", "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline",
     "TrendFiltered",
     "WeakForm", "ZarrSource", "errors", "io", "load_model", "metrics", "systems",
+    "FieldSource", "FieldWeakForm", "Grid", "PDEDiscrepancyModel", "PDELibrary",
+    "SpatialFiniteDifference", "SpatialSavitzkyGolay", "SpatialSpectral",
 ]

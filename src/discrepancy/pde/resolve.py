@@ -1,0 +1,124 @@
+"""Resolving a PDE model's parameters into a :class:`~discrepancy.pde.setup.FieldSetup`.
+
+Names are checked, the default library is sized from the prior (its derivative order, at
+least 2), the jet holds every derivative the library or the prior names, and the time and
+space differentiation are chosen from the data when they are ``"auto"``
+(:mod:`discrepancy.pde.auto`). The model's own parameters are never changed.
+"""
+from __future__ import annotations
+
+import copy
+
+from ..differentiation import Differentiator, get_differentiation_method
+from ..differentiation.spatial import SpatialDifferentiator, get_spatial_method
+from ..errors import ParameterError
+from ..libraries import FeatureLibrary, PolynomialLibrary
+from ..libraries.pde import PDELibrary, library_derivative_order
+from ..models.setup import resolve_names
+from ..optimizers import get_optimizer
+from .prior import FieldPrior
+from .setup import FieldSetup
+from .variables import FieldVariables
+from .weak import FieldWeakForm
+
+#: the default library: PDE-FIND's products of cubic polynomials of the fields (with a
+#: constant) and derivatives up to the prior's order (at least second)
+DEFAULT_DEGREE = 3
+
+
+def default_library(order: int) -> PDELibrary:
+    return PDELibrary(PolynomialLibrary(DEFAULT_DEGREE, include_bias=True),
+                      derivative_order=max(2, order))
+
+
+def resolve_setup(model, n_fields: int, n_inputs: int, grid, sample=None,
+                  probe_snapshots: int | None = None) -> FieldSetup:
+    """The set-up of ``model`` for ``n_fields`` fields and ``n_inputs`` inputs on ``grid``;
+    ``sample``: runs that data-driven choices look at."""
+    fields = resolve_names("field_names", model.field_names, n_fields, "u", one="u")
+    inputs = resolve_names("input_names", model.input_names, n_inputs, "f", one="f")
+    taken = set(grid.names) | {"t"}
+    clash = sorted((set(fields) | set(inputs)) & taken) or sorted(set(fields) & set(inputs))
+    if clash:
+        raise ParameterError(f"field and input names must differ from each other and from "
+                             f"the coordinates {list(grid.names)} and 't'; {clash} clash")
+    prior = FieldPrior(model.prior, fields, grid.names, inputs)
+    library = model.feature_library
+    if library is None:
+        library = default_library(prior.order)
+    elif not isinstance(library, FeatureLibrary):
+        raise ParameterError(f"feature_library must be a feature library (e.g. PDELibrary()); "
+                             f"got {type(library).__name__}")
+    order = max(library_derivative_order(library, fields, grid.names), prior.order)
+    variables = FieldVariables(tuple(fields), tuple(grid.names), tuple(inputs), order)
+    library = copy.deepcopy(library).fit(variables.names)
+    optimizer = copy.deepcopy(get_optimizer(model.optimizer))
+    optimizer._validate_params()
+    time_methods, spatial, choice = resolve_methods(model, grid, sample, n_fields, order)
+    if probe_snapshots is None:
+        probe_snapshots = sum(r.n_samples for r in sample) if sample else 1000
+    return FieldSetup(variables, grid, prior, library, optimizer, time_methods, spatial,
+                      choice, int(probe_snapshots))
+
+
+def resolve_methods(model, grid, sample, n_fields: int, order: int):
+    """``(time_methods, spatial, choice)`` from the model's differentiation parameters."""
+    from .auto import choose
+
+    method = model.differentiation_method
+    spatial = _spatial(model.spatial_differentiation, grid)
+    if method is None or method == "auto":
+        if not sample:
+            raise ParameterError("differentiation_method='auto' chooses from the data; give "
+                                 "the data (fit) or a method")
+        return choose(sample, grid, order, spatial=spatial)
+    if isinstance(method, str) and method == "weak":
+        method = FieldWeakForm()
+    if isinstance(method, FieldWeakForm):
+        method._validate_params()
+        if method.data_driven or spatial is None:
+            if not sample:
+                raise ParameterError("a weak form with widths=None chooses them from the data")
+            return choose(sample, grid, order, spatial=spatial, weak=method)
+        return (_powered(method, order),), spatial, None
+    method = copy.deepcopy(get_differentiation_method(method))
+    if not isinstance(method, Differentiator):
+        raise ParameterError(f"differentiation_method must be 'auto', 'weak', a FieldWeakForm "
+                             f"or a time Differentiator; got {method!r}")
+    method._validate_params()
+    if getattr(method, "data_driven", False):
+        from .auto import time_smoothing
+
+        methods, info = time_smoothing(sample, method)
+        return methods, spatial or _spatial("auto", grid, clean=True), info
+    return (method,) * n_fields, spatial or _spatial("auto", grid, clean=True), None
+
+
+def _powered(form: FieldWeakForm, order: int) -> FieldWeakForm:
+    if form.power is not None:
+        return form
+    return FieldWeakForm(form.widths, power=max(8, 2 * order + 2), stride=form.stride)
+
+
+def _spatial(given, grid, *, clean: bool = False):
+    """One spatial method per axis from the parameter (``None``/"auto": decided from the
+    data, unless ``clean``: spectral on periodic axes, 6th-order differences elsewhere)."""
+    from ..differentiation.spatial import SpatialFiniteDifference, SpatialSpectral
+
+    if given is None or given == "auto":
+        if not clean:
+            return None
+        return tuple(SpatialSpectral() if p else SpatialFiniteDifference(6)
+                     for p in grid.periodic)
+    items = list(given) if isinstance(given, (list, tuple)) else [given] * grid.ndim
+    if len(items) != grid.ndim:
+        raise ParameterError(f"spatial_differentiation must be one method or one per axis "
+                             f"({grid.ndim}); got {len(items)}")
+    methods = tuple(copy.deepcopy(get_spatial_method(m)) if not isinstance(
+        m, SpatialDifferentiator) else copy.deepcopy(m) for m in items)
+    for m, p, name in zip(methods, grid.periodic, grid.names, strict=True):
+        m._validate_params()
+        if m.periodic_only and not p:
+            raise ParameterError(f"{type(m).__name__} needs a periodic axis; axis {name!r} is "
+                                 "not periodic")
+    return methods
