@@ -38,9 +38,13 @@ class SpatialDifferentiator(Estimator, ABC):
     periodic_only: bool = False
 
     def derivative(self, u: np.ndarray, axis: int, order: int, spacing: float,
-                   periodic: bool) -> np.ndarray:
+                   periodic: bool, *, check: bool = True) -> np.ndarray:
         """The ``order``-th derivative of ``u`` along ``axis`` (grid step ``spacing``);
-        same shape as ``u``."""
+        same shape as ``u``. ``check=False`` skips the checks (a hot loop that made them
+        once, such as a simulation's right-hand side)."""
+        if not check:
+            return u if order == 0 else self._derivative(u, axis, order, float(spacing),
+                                                         bool(periodic))
         self._validate_params()
         if self.periodic_only and not periodic:
             raise ParameterError(f"{type(self).__name__} needs a periodic axis; this axis is "

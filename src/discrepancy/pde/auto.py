@@ -38,6 +38,11 @@ SIGNAL_OVER_NOISE = 10.0
 FILTER = 1e-2
 #: lines of the grid sampled per field and axis for the estimates
 LINES = 64
+#: time half-widths are at most 1/TIME_FRACTION of the record: the threshold is chosen by
+#: cross-validation over blocks of snapshots, which test functions spanning several blocks
+#: would correlate (Schrodinger's equation at 1 % noise, 301 samples: 19 spurious terms with
+#: 75-sample half-widths, the right two with 37)
+TIME_FRACTION = 8
 #: smallest half-width (samples): rectangle rules of the derivative kernels stay accurate
 MIN_WIDTH = 10
 
@@ -124,12 +129,15 @@ def choose(sample, grid, order: int, *, spatial=None, weak: FieldWeakForm | None
         lines = [x for j in range(sample[0].n_fields) for x in _lines(sample, axis, j)]
         fraction = changepoint(lines, sigma, periodic)
         limit = (lengths[axis] // 2 - 1) if periodic else (lengths[axis] - 1) // 4
+        if axis == 0:       # time: blocked cross-validation needs supports short of a fold
+            limit = lengths[0] // TIME_FRACTION
         fractions.append(fraction)
         widths.append(half_width(fraction, power, limit))
     if weak is not None and weak.widths is not None:
         widths = [int(w) for w in weak.widths]
     stride = None if weak is None else weak.stride
-    form = FieldWeakForm(widths, power=power, stride=stride)
+    debias = noise.tolist() if weak is None or weak.noise_std is None else weak.noise_std
+    form = FieldWeakForm(widths, power=power, stride=stride, noise_std=debias)
     spatial = spatial or tuple(_smoother(sample, grid, axis, fractions[axis + 1])
                                for axis in range(grid.ndim))
     return (form,), spatial, {**info, "form": "weak", "widths": widths,

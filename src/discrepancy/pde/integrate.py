@@ -13,6 +13,7 @@ from .simulation import (
     boundary_mask,
     check_method,
     fourier_symbols,
+    jacobian_sparsity,
     linear_part,
     run_etdrk4,
     run_solve_ivp,
@@ -36,7 +37,9 @@ def simulate(model, u0, t, *, inputs, method, rtol, atol, boundary):
     methods = simulation_methods(grid)
 
     def rhs(u, time):
-        return model._evaluate(u[None], input_at(time), methods, "hybrid")[0]
+        return model._evaluate(u[None], input_at(time), methods, "hybrid", check=False)[0]
+
+    model._evaluate(u0[None], input_at(t[0]), methods, "hybrid")  # checked once, by name
 
     symbolic = model.prior is None or model.prior_.is_symbolic
     method = check_method(method, symbolic, grid)
@@ -45,7 +48,11 @@ def simulate(model, u0, t, *, inputs, method, rtol, atol, boundary):
     fixed = None
     if boundary == "fixed" and not all(grid.periodic):
         fixed = boundary_mask(grid, n)
-    return run_solve_ivp(rhs, u0, t, method=method, rtol=rtol, atol=atol, fixed=fixed)
+    sparsity = None
+    if symbolic and method in ("BDF", "Radau"):
+        sparsity = jacobian_sparsity(grid, n, model.setup_.variables.order)
+    return run_solve_ivp(rhs, u0, t, method=method, rtol=rtol, atol=atol, fixed=fixed,
+                         sparsity=sparsity)
 
 
 def _etdrk4(model, u0, t, input_at, rtol):

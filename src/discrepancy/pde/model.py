@@ -185,9 +185,9 @@ class PDEDiscrepancyModel(Estimator):
         theta = np.column_stack([np.broadcast_to(f(z), z.shape[:1]) for f in self._active])
         return theta @ self._active_coef
 
-    def _evaluate(self, u, inputs, methods, part: str) -> np.ndarray:
+    def _evaluate(self, u, inputs, methods, part: str, check: bool = True) -> np.ndarray:
         variables = self.setup_.variables
-        jet = variables.jet(u, inputs, self.grid_, methods)
+        jet = variables.jet(u, inputs, self.grid_, methods, check=check)
         g = self._g_flat(jet.reshape(-1, jet.shape[-1])).reshape(u.shape)
         if part == "discrepancy":
             return g

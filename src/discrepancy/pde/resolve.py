@@ -22,13 +22,28 @@ from .variables import FieldVariables
 from .weak import FieldWeakForm
 
 #: the default library: PDE-FIND's products of cubic polynomials of the fields (with a
-#: constant) and derivatives up to the prior's order (at least second)
+#: constant) and their derivatives, to the highest order (at most 4) that keeps it within
+#: DEFAULT_COLUMNS columns, and never below the prior's order or 2
 DEFAULT_DEGREE = 3
+DEFAULT_MAX_ORDER = 4
+DEFAULT_COLUMNS = 120
 
 
-def default_library(order: int) -> PDELibrary:
+def default_library(prior_order: int, n_fields: int, ndim: int) -> PDELibrary:
+    """The default library (see :data:`DEFAULT_COLUMNS`): one field in 1-D gets fourth
+    derivatives (20 columns), two fields in 2-D second ones (110 columns)."""
+    from math import comb
+
+    from ..libraries.pde import multiindices
+
+    functions = comb(n_fields + DEFAULT_DEGREE, DEFAULT_DEGREE)
+    order = max(2, prior_order)
+    for k in range(DEFAULT_MAX_ORDER, order, -1):
+        if functions * (1 + n_fields * len(multiindices(ndim, k))) <= DEFAULT_COLUMNS:
+            order = k
+            break
     return PDELibrary(PolynomialLibrary(DEFAULT_DEGREE, include_bias=True),
-                      derivative_order=max(2, order))
+                      derivative_order=order)
 
 
 def resolve_setup(model, n_fields: int, n_inputs: int, grid, sample=None,
@@ -45,7 +60,7 @@ def resolve_setup(model, n_fields: int, n_inputs: int, grid, sample=None,
     prior = FieldPrior(model.prior, fields, grid.names, inputs)
     library = model.feature_library
     if library is None:
-        library = default_library(prior.order)
+        library = default_library(prior.order, n_fields, grid.ndim)
     elif not isinstance(library, FeatureLibrary):
         raise ParameterError(f"feature_library must be a feature library (e.g. PDELibrary()); "
                              f"got {type(library).__name__}")
@@ -76,7 +91,7 @@ def resolve_methods(model, grid, sample, n_fields: int, order: int):
         method = FieldWeakForm()
     if isinstance(method, FieldWeakForm):
         method._validate_params()
-        if method.data_driven or spatial is None:
+        if method.data_driven or spatial is None or method.noise_std is None:
             if not sample:
                 raise ParameterError("a weak form with widths=None chooses them from the data")
             return choose(sample, grid, order, spatial=spatial, weak=method)

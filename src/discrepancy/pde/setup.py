@@ -27,6 +27,13 @@ from .weak import FieldWeakForm, WeakPlan, weak_rows
 N_FOLDS = 5
 
 
+def _noise(noise_std, n: int):
+    """Noise per field for the weak form's bias correction (``None``: no correction)."""
+    if noise_std is None or (np.ndim(noise_std) == 0 and noise_std == 0):
+        return None
+    return [float(s) for s in noise_std] if len(noise_std) == n else None
+
+
 @dataclass(frozen=True)
 class FieldSetup:
     """Everything a PDE fit needs besides the data, resolved once.
@@ -91,7 +98,8 @@ class FieldSetup:
         if self.weak is None:
             return None
         return WeakPlan.build(self.library.feature_expressions_, self.prior.expressions,
-                              self.variables.fields, self.variables.coordinates)
+                              self.variables.fields, self.variables.coordinates,
+                              _noise(self.weak.noise_std, self.n_fields))
 
     @property
     def rows_per_snapshot(self) -> int:
@@ -100,8 +108,9 @@ class FieldSetup:
         from .weak import centres
 
         widths = [int(w) for w in self.weak.widths[1:]]
+        strides = self.weak.strides(self.grid)
         return int(np.prod([len(centres(n, w, s, p)) for n, w, s, p in zip(
-            self.grid.shape, widths, self.weak.strides(), self.grid.periodic, strict=True)]))
+            self.grid.shape, widths, strides, self.grid.periodic, strict=True)]))
 
     def rows(self, run: FieldRun) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(z, y, signal)`` of one run (or a piece of one): in the pointwise form the

@@ -160,9 +160,25 @@ def _interval(advance, v, t0, dt, steps, rtol):
     return None, steps      # no step size reaches rtol: blowing up
 
 
-def run_solve_ivp(rhs, u0, t, *, method: str, rtol: float, atol: float, fixed=None):
+def jacobian_sparsity(grid, n_fields: int, order: int):
+    """Which values each point's derivative depends on, for ``solve_ivp``'s finite-difference
+    Jacobian: every field within the reach of the 4th-order stencils (``order + 3`` points,
+    one-sided ends included) along non-periodic axes, the whole of periodic (spectral) ones."""
+    from scipy import sparse
+
+    reach = order + 3
+    pattern = sparse.csr_matrix(np.ones((1, 1)))
+    for n, periodic in zip(grid.shape, grid.periodic, strict=True):
+        i = np.arange(n)
+        axis = np.ones((n, n)) if periodic else (np.abs(i[:, None] - i[None, :]) <= reach)
+        pattern = sparse.kron(pattern, sparse.csr_matrix(axis.astype(float)), format="csr")
+    return sparse.kron(pattern, sparse.csr_matrix(np.ones((n_fields, n_fields))), format="csr")
+
+
+def run_solve_ivp(rhs, u0, t, *, method: str, rtol: float, atol: float, fixed=None,
+                  sparsity=None):
     """The semi-discrete system with scipy's ``solve_ivp``; ``fixed``: a boolean mask of
-    points held at their initial values."""
+    points held at their initial values; ``sparsity``: the Jacobian's pattern (BDF, Radau)."""
     from scipy.integrate import solve_ivp
 
     shape = u0.shape
@@ -173,8 +189,9 @@ def run_solve_ivp(rhs, u0, t, *, method: str, rtol: float, atol: float, fixed=No
             du = np.where(fixed, 0.0, du)
         return du.ravel()
 
+    options = {} if sparsity is None else {"jac_sparsity": sparsity}
     sol = solve_ivp(f, (t[0], t[-1]), u0.ravel(), t_eval=t, method=method, rtol=rtol,
-                    atol=atol)
+                    atol=atol, **options)
     if not sol.success or sol.y.shape[1] != len(t):
         k = sol.y.shape[1]
         raise SimulationError(f"solve_ivp ({method}) stopped at t = {sol.t[-1] if k else t[0]:.6g}"

@@ -45,28 +45,30 @@ class FieldVariables:
     def with_order(self, order: int) -> FieldVariables:
         return FieldVariables(self.fields, self.coordinates, self.inputs, order)
 
-    def jet(self, u: np.ndarray, inputs: np.ndarray | None, grid, methods) -> np.ndarray:
+    def jet(self, u: np.ndarray, inputs: np.ndarray | None, grid, methods, *,
+            check: bool = True) -> np.ndarray:
         """``(k, *grid.shape, n_variables)``: the variables on snapshots ``u``
         ``(k, *grid.shape, n_fields)`` (inputs ``(k, *grid.shape, r)`` or ``None``);
-        ``methods``: one spatial differentiator per axis."""
+        ``methods``: one spatial differentiator per axis (``check=False``: already
+        checked)."""
         parts = [u]
         cache = {(0,) * grid.ndim: u}
         for alpha in multiindices(grid.ndim, self.order):
-            parts.append(_derivative(alpha, cache, grid, methods))
+            parts.append(_derivative(alpha, cache, grid, methods, check))
         if self.inputs:
             parts.append(inputs)
         return np.concatenate(parts, axis=-1)
 
 
-def _derivative(alpha, cache, grid, methods):
+def _derivative(alpha, cache, grid, methods, check):
     """``∂^α u`` of all fields, built from the cached derivative with one order less along
     the last axis that has one (so ``u_xy`` reuses ``u_x``)."""
     if alpha in cache:
         return cache[alpha]
     axis = max(i for i, a in enumerate(alpha) if a > 0)
     base = tuple(a if i != axis else 0 for i, a in enumerate(alpha))
-    lower = _derivative(base, cache, grid, methods)
+    lower = _derivative(base, cache, grid, methods, check)
     value = methods[axis].derivative(lower, axis + 1, alpha[axis], grid.spacing[axis],
-                                     grid.periodic[axis])
+                                     grid.periodic[axis], check=check)
     cache[alpha] = value
     return value

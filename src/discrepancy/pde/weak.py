@@ -24,7 +24,7 @@ import numpy as np
 import sympy as sp
 
 from ..base import Estimator
-from ..constraints import Integral, Interval, Predicate
+from ..constraints import Integral, Interval, Predicate, Real
 from ..errors import ShapeError
 from ..symbolic import compile_numpy
 from .divergence import Jet, divergence_form
@@ -45,18 +45,27 @@ class FieldWeakForm(Estimator):
             that every kernel vanishes smoothly at the support's edge.
         stride: grid points between neighbouring centres per spatial axis; ``None``: half
             the spatial half-width.
+        noise_std: the fields' noise standard deviations, one per field, whose bias in
+            polynomial terms is removed (:func:`unbiased`); ``None``: estimated from the
+            data at each fit; ``0``: no correction.
     """
 
     _parameter_constraints = {"widths": [None, _WIDTHS], "power": [None, Interval(Integral, 2, 24)],
                               "stride": [None, Predicate(lambda v: isinstance(v, (list, tuple))
                                                          and all(Interval(Integral, 1)
                                                                  .is_satisfied_by(s) for s in v),
-                                                         "a list of strides >= 1 per axis")]}
+                                                         "a list of strides >= 1 per axis")],
+                              "noise_std": [None, Interval(Real, 0, 0), Predicate(
+                                  lambda v: isinstance(v, (list, tuple)) and all(
+                                      Interval(Real, 0).is_satisfied_by(s) for s in v),
+                                  "a list of standard deviations >= 0, one per field")]}
 
-    def __init__(self, widths=None, *, power: int | None = None, stride=None):
+    def __init__(self, widths=None, *, power: int | None = None, stride=None,
+                 noise_std=None):
         self.widths = widths
         self.power = power
         self.stride = stride
+        self.noise_std = noise_std
 
     @property
     def data_driven(self) -> bool:
@@ -70,10 +79,21 @@ class FieldWeakForm(Estimator):
     def min_samples(self) -> int:
         return 2 * int(self.widths[0]) + 1
 
-    def strides(self) -> list[int]:
+    def strides(self, grid) -> list[int]:
+        """Grid points between centres per axis: ``stride``, or half the half-width but
+        close enough for :data:`MIN_CENTRES` centres along the axis (few rows made the
+        regression ill-conditioned on short non-periodic axes)."""
         if self.stride is not None:
             return [int(s) for s in self.stride]
-        return [max(1, int(w) // 2) for w in self.widths[1:]]
+        out = []
+        for w, n, periodic in zip(self.widths[1:], grid.shape, grid.periodic, strict=True):
+            room = n if periodic else max(1, n - 2 * int(w))
+            out.append(max(1, min(int(w) // 2, room // MIN_CENTRES)))
+        return out
+
+
+#: fewest test-function centres wanted along an axis (when the axis allows them)
+MIN_CENTRES = 16
 
 
 def bump(width: int, power: int, order: int, step: float) -> np.ndarray:
@@ -146,13 +166,19 @@ class WeakPlan:
     cache: dict
 
     @classmethod
-    def build(cls, expressions, prior_expressions, fields, coordinates) -> WeakPlan:
+    def build(cls, expressions, prior_expressions, fields, coordinates,
+              noise=None) -> WeakPlan:
+        """The plan for library ``expressions`` and the prior's; ``noise``: the fields'
+        noise standard deviations, whose bias in polynomial terms is removed
+        (:func:`unbiased`)."""
         jet = Jet(fields, coordinates)
         integrals, index = [], {}
 
         def terms(expr):
             out = []
             for beta, h in divergence_form(expr, jet).items():
+                if noise is not None:
+                    h = unbiased(h, dict(zip(fields, noise, strict=True)))
                 for part in sp.Add.make_args(h):
                     c, body = part.as_coeff_Mul()
                     key = (beta, body)
@@ -175,6 +201,32 @@ class WeakPlan:
         return self.cache[key]
 
 
+def unbiased(h: sp.Expr, noise: dict) -> sp.Expr:
+    """``h`` with each monomial of the fields replaced by its unbiased counterpart under
+    independent Gaussian noise of standard deviation ``noise[field]``: ``u^k`` becomes the
+    scaled Hermite polynomial ``σ^k He_k(u / σ)`` (``u² - σ²``, ``u³ - 3 σ² u``), whose mean
+    over the noise is ``u^k``. Terms with derivatives or other symbols are left alone (their
+    noise is filtered, not white)."""
+    from sympy.polys.orthopolys import hermite_prob_poly
+
+    symbols = [s for s in h.free_symbols]
+    if not symbols or any(s.name not in noise for s in symbols):
+        return h
+    poly = sp.Poly(h, *symbols)
+    out = sp.S.Zero
+    for powers, c in poly.terms():
+        term = sp.Float(c) if not c.is_Rational else c
+        for s, k in zip(symbols, powers, strict=True):
+            sigma = float(noise[s.name])
+            if k >= 2 and sigma > 0:
+                x = sp.Dummy()
+                term *= sp.expand(sigma ** k * hermite_prob_poly(k, x)).subs(x, s / sigma)
+            else:
+                term *= s ** k
+        out += sp.expand(term)
+    return sp.expand(out)
+
+
 def weak_rows(form: FieldWeakForm, plan: WeakPlan, u, inputs, t, grid, jet_names, jet,
               functions, prior_values=None):
     """``(theta, y, signal)`` rows of one run piece (see the module docstring).
@@ -183,7 +235,7 @@ def weak_rows(form: FieldWeakForm, plan: WeakPlan, u, inputs, t, grid, jet_names
     ``plan.order``); ``prior_values``: a callable prior's ``N_m`` on them, or ``None``."""
     dt = float(t[1] - t[0])
     q = int(form.power)
-    widths, strides = [int(w) for w in form.widths], form.strides()
+    widths, strides = [int(w) for w in form.widths], form.strides(grid)
     index = [centres(n, w, s, p) for n, w, s, p in zip(grid.shape, widths[1:], strides,
                                                        grid.periodic, strict=True)]
 
