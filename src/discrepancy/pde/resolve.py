@@ -91,11 +91,12 @@ def resolve_methods(model, grid, sample, n_fields: int, order: int):
         method = FieldWeakForm()
     if isinstance(method, FieldWeakForm):
         method._validate_params()
-        if method.data_driven or spatial is None or method.noise_std is None:
-            if not sample:
-                raise ParameterError("a weak form with widths=None chooses them from the data")
+        if sample and (method.data_driven or spatial is None or method.noise_std is None):
             return choose(sample, grid, order, spatial=spatial, weak=method)
-        return (_powered(method, order),), spatial, None
+        if method.data_driven:
+            raise ParameterError("a weak form with widths=None chooses them from the data; "
+                                 "give the data (fit) or widths")
+        return (_powered(method, order),), spatial or _spatial("auto", grid, clean=True), None
     method = copy.deepcopy(get_differentiation_method(method))
     if not isinstance(method, Differentiator):
         raise ParameterError(f"differentiation_method must be 'auto', 'weak', a FieldWeakForm "
