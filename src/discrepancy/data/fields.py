@@ -167,7 +167,7 @@ def field_array(name: str, u, grid: Grid, *, n_fields: int | None = None,
     return a
 
 
-def _input_array(name: str, v, grid: Grid, m: int, r: int | None) -> np.ndarray:
+def input_array(name: str, v, grid: Grid, m: int, r: int | None) -> np.ndarray:
     """Inputs as ``(m, *grid.shape, r)``: input fields, or signals ``(m,)``/``(m, r)`` that are
     broadcast over the grid (an array shaped like a field is a field)."""
     a = as_float_array(name, v)
@@ -233,7 +233,7 @@ def as_field_runs(u, t, grid, inputs=None, *, name: str = "u",
                             "are differentiated and integrated on a uniform time grid)")
         if (vi is None) != (vs[0] is None):
             raise ShapeError(f"inputs must be given for all runs or none; run {i} differs")
-        v = None if vi is None else _input_array(f"inputs[{i}]" if several else "inputs", vi,
+        v = None if vi is None else input_array(f"inputs[{i}]" if several else "inputs", vi,
                                                  grid, a.shape[0], r)
         r = None if v is None else v.shape[-1]
         out.append(FieldRun(times, a, v, grid))

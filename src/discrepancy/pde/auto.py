@@ -69,10 +69,10 @@ def noise_levels(sample, grid) -> tuple[np.ndarray, np.ndarray]:
     for j in range(n):
         estimates = []
         for axis in range(grid.ndim + 1):
-            lines = [x for x in _lines(sample, axis, j) if len(x) > 12]
-            if lines:
-                estimates.append(float(np.sqrt(np.mean(
-                    noise_std(np.stack(lines, axis=1)) ** 2))))
+            squares = [noise_std(np.stack(lines, axis=1)) ** 2 for run in sample
+                       if len(lines := [x for x in _lines([run], axis, j) if len(x) > 12])]
+            if squares:
+                estimates.append(float(np.sqrt(np.mean([np.mean(s) for s in squares]))))
         noise[j] = min(estimates) if estimates else 0.0
         spread[j] = float(np.sqrt(np.mean([np.var(r.u[..., j]) for r in sample])))
     return noise, spread
@@ -131,8 +131,9 @@ def choose(sample, grid, order: int, *, spatial=None, weak: FieldWeakForm | None
     lengths = [min(r.n_samples for r in sample), *grid.shape]
     for axis in range(grid.ndim + 1):
         periodic = axis > 0 and grid.periodic[axis - 1]
-        lines = [x for j in range(sample[0].n_fields) for x in _lines(sample, axis, j)]
-        fraction = changepoint(lines, sigma, periodic)
+        fraction = max(changepoint([x for j in range(run.n_fields)
+                                    for x in _lines([run], axis, j)], sigma, periodic)
+                       for run in sample)
         limit = (lengths[axis] // 2 - 1) if periodic else (lengths[axis] - 1) // 4
         if axis == 0:       # time: blocked cross-validation needs supports short of a fold
             limit = lengths[0] // TIME_FRACTION
@@ -158,7 +159,7 @@ def _smoother(sample, grid, axis: int, fraction: float):
     if grid.periodic[axis]:
         return SpatialSpectral(cutoff=min(1.0, max(fraction, 1e-3)))
     lines = [x for j in range(sample[0].n_fields) for x in _lines(sample, axis + 1, j)]
-    limit = (min(len(x) for x in lines) // 4) // 2 * 2 - 1
+    limit = (grid.shape[axis] // 4) // 2 * 2 - 1
     if limit < 9:
         return SpatialFiniteDifference(6)
     window, _ = gcv_window(lines, 7, limit)

@@ -152,8 +152,9 @@ class PDEDiscrepancyModel(Estimator):
         if stats.count == 0 or not np.any(stats.gram):
             raise DataError("the statistics hold no usable rows (runs too short for the "
                             "test functions or derivative windows?)")
-        optimizer = copy.deepcopy(setup.optimizer)
-        optimizer.fit_statistics(stats)
+        from .solve import solve
+
+        optimizer = solve(copy.deepcopy(setup.optimizer), stats)
         self._set_fit(setup, optimizer.coef_, optimizer, stats)
         return self
 
@@ -174,10 +175,17 @@ class PDEDiscrepancyModel(Estimator):
 
     # --------------------------------------------------------------- evaluation
     def _snapshots(self, u, inputs):
+        """Checked snapshots ``(k, *shape, n)`` and inputs ``(k, *shape, r)`` or ``None``."""
+        from ..data.fields import input_array
+
         self.check_is_fitted()
         u = field_array("u", u, self.grid_, n_fields=len(self.field_names_))
-        runs = as_field_runs(u, 1.0, self.grid_, inputs, min_samples=1)
-        return runs[0]
+        r = len(self.input_names_)
+        if (inputs is None) != (r == 0):
+            raise ShapeError(f"the model has {r} inputs; inputs must be given exactly when it "
+                             f"has some (got {describe(inputs)})")
+        return u, None if inputs is None else input_array("inputs", inputs, self.grid_,
+                                                          u.shape[0], r)
 
     def _g_flat(self, z: np.ndarray) -> np.ndarray:
         if not self._active:
@@ -198,15 +206,15 @@ class PDEDiscrepancyModel(Estimator):
         (derivatives spectral on periodic axes, 4th-order differences elsewhere)."""
         from .simulation import simulation_methods
 
-        run = self._snapshots(u, inputs)
-        return self._evaluate(run.u, run.inputs, simulation_methods(self.grid_), "discrepancy")
+        u, inputs = self._snapshots(u, inputs)
+        return self._evaluate(u, inputs, simulation_methods(self.grid_), "discrepancy")
 
     def predict(self, u, inputs=None) -> np.ndarray:
         """``u_t = N_m + g`` of the hybrid model on snapshots, ``(k, *shape, n)``."""
         from .simulation import simulation_methods
 
-        run = self._snapshots(u, inputs)
-        return self._evaluate(run.u, run.inputs, simulation_methods(self.grid_), "hybrid")
+        u, inputs = self._snapshots(u, inputs)
+        return self._evaluate(u, inputs, simulation_methods(self.grid_), "hybrid")
 
     def simulate(self, u0, t, *, inputs=None, method: str = "auto", rtol: float = 1e-6,
                  atol: float = 1e-9, boundary: str = "fixed") -> np.ndarray:
