@@ -141,9 +141,11 @@ class FieldRun:
 
 
 def field_array(name: str, u, grid: Grid, *, n_fields: int | None = None,
-                where: str | None = None, min_samples: int = 1) -> np.ndarray:
+                where: str | None = None, min_samples: int = 1,
+                row_offset: int = 0) -> np.ndarray:
     """``(m, *grid.shape, n)`` float64 from ``(m, *grid.shape)`` (one field) or
-    ``(m, *grid.shape, n)``, checked: shape against the grid, finite values."""
+    ``(m, *grid.shape, n)``, checked: shape against the grid, finite values (``row_offset``:
+    the run's time row of ``u[0]``, for messages about a chunk)."""
     place = f"{where}: " if where else ""
     a = as_float_array(name, u, where)
     spatial = grid.shape
@@ -162,7 +164,7 @@ def field_array(name: str, u, grid: Grid, *, n_fields: int | None = None,
     if not np.all(np.isfinite(a)):
         index = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
         raise DataError(f"{place}{name} must be finite; found {a[index]} at time row "
-                        f"{index[0]}, grid point {index[1:-1]}, field {index[-1]} "
+                        f"{row_offset + index[0]}, grid point {index[1:-1]}, field {index[-1]} "
                         f"({int((~np.isfinite(a)).sum())} non-finite values)")
     return a
 

@@ -26,7 +26,8 @@ def _block(rows, u, *, setup, step, halo, n_total, offset):
     """Packed statistics ``(1, L)`` of one time block (``rows``: its snapshot numbers)."""
     rows = rows.ravel().astype(int)
     where = f"dask array snapshots {rows[0]}..{rows[-1]}"
-    u = field_array("u", u, setup.grid, n_fields=setup.n_fields, where=where)
+    u = field_array("u", u, setup.grid, n_fields=setup.n_fields, where=where,
+                    row_offset=int(rows[0]))
     lo = 0 if rows[0] == 0 else halo
     hi = len(rows) if rows[-1] == n_total - 1 else len(rows) - halo
     stats = setup.new_statistics()

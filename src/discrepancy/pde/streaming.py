@@ -78,7 +78,8 @@ class FieldSource:
         with _opened(self.items[run]) as a:
             block = np.asarray(a[start:stop], dtype=float)
         where = f"run {run} snapshots {start}..{stop - 1}"
-        u = field_array("u", block, self.grid, n_fields=self.n_fields, where=where)
+        u = field_array("u", block, self.grid, n_fields=self.n_fields, where=where,
+                        row_offset=start)
         return FieldRun(np.arange(start, stop) * self.dt, u, None, self.grid)
 
 

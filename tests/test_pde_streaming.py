@@ -1,0 +1,124 @@
+"""Fields streamed from disk (zarr, HDF5) in time chunks and fitted on Dask give the
+in-memory statistics and model; a smaller version of benchmarks/bench_pde.py."""
+import dask
+import dask.array as da
+import numpy as np
+import pytest
+
+import discrepancy as dc
+from discrepancy.errors import MissingFileError, ParameterError, ShapeError, UnknownNameError
+from discrepancy.symbolic import symbol
+
+u, ux, uxx = (symbol(n) for n in ("u", "u_x", "u_xx"))
+DT = 0.05
+
+
+@pytest.fixture(scope="module")
+def ks():
+    """Burgers (nu = 0.1) on 64 points, 481 samples: several chunks of a long run."""
+    x = np.linspace(-8, 8, 64, endpoint=False)
+    grid = dc.Grid(x, periodic=True)
+    truth = dc.PDEDiscrepancyModel.prior_only([-u * ux + 0.1 * uxx], grid)
+    U = truth.simulate(np.exp(-(x + 2) ** 2) + 0.5 * np.exp(-(x - 3) ** 2),
+                       np.arange(0, 24.0001, DT), rtol=1e-9)[..., 0]
+    noisy = U + 0.02 * U.std() * np.random.default_rng(0).standard_normal(U.shape)
+    return {"clean": U, "noisy": noisy}, grid
+
+
+def model():
+    return dc.PDEDiscrepancyModel(prior=[-u * ux + 0.05 * uxx])
+
+
+def rel(a, b):
+    return np.max(np.abs(a - b)) / np.max(np.abs(b))
+
+
+def same(got, ref):
+    assert got.statistics_.count == ref.statistics_.count
+    assert rel(got.statistics_.gram, ref.statistics_.gram) < 1e-12
+    for a, b in zip(got.statistics_.folds, ref.statistics_.folds, strict=True):
+        assert rel(a.rhs, b.rhs) < 1e-10
+    assert np.array_equal(got.coef_ != 0, ref.coef_ != 0)
+    assert rel(got.coef_, ref.coef_) < 1e-10
+
+
+@pytest.mark.parametrize("kind", ["clean", "noisy"])
+def test_zarr_and_hdf5_in_time_chunks_equal_in_memory(ks, kind, tmp_path):
+    import h5py
+    import zarr
+
+    data, grid = ks
+    U = data[kind]
+    ref = model().fit(U, t=DT, grid=grid)
+    assert ref.differentiation_choice_["form"] == ("pointwise" if kind == "clean" else "weak")
+    names = ref.get_feature_names()
+    assert {names[j] for j in np.flatnonzero(ref.coef_[0])} == {"u_xx"}
+    store = zarr.open(str(tmp_path / "u.zarr"), mode="w", shape=U.shape, chunks=(50, 64),
+                      dtype="f8")
+    store[:] = U
+    with h5py.File(tmp_path / "u.h5", "w") as f:
+        f["fields/u"] = U
+    for item in [(tmp_path / "u.zarr", ""), (tmp_path / "u.h5", "fields/u")]:
+        if item[1] == "":
+            item = (item[0], None)
+        source = dc.FieldSource(item if item[1] else U, grid=grid, dt=DT, chunk_size=37)
+        same(model().fit(source, grid=grid), ref)
+
+
+def test_zarr_store_by_path(ks, tmp_path):
+    import zarr
+
+    data, grid = ks
+    U = data["noisy"]
+    root = zarr.open_group(str(tmp_path / "g.zarr"), mode="w")
+    root.create_array("u", shape=U.shape, chunks=(40, 64), dtype="f8")[:] = U
+    got = model().fit(dc.FieldSource((tmp_path / "g.zarr", "u"), grid=grid, dt=DT,
+                                     chunk_size=50), grid=grid)
+    same(got, model().fit(U, t=DT, grid=grid))
+
+
+def test_dask_threads_equal_in_memory(ks):
+    data, grid = ks
+    for U in data.values():
+        ref = model().fit(U, t=DT, grid=grid)
+        with dask.config.set(scheduler="threads"):
+            got = model().fit(da.from_array(U, chunks=(61, 64)), t=DT, grid=grid)
+        same(got, ref)
+
+
+@pytest.mark.slow
+def test_dask_local_cluster_equals_in_memory(ks):
+    distributed = pytest.importorskip("distributed")
+    data, grid = ks
+    U = data["noisy"]
+    ref = model().fit(U, t=DT, grid=grid)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster, \
+            distributed.Client(cluster):
+        got = model().fit(da.from_array(U, chunks=(100, 64)), t=DT, grid=grid)
+    same(got, ref)
+
+
+def test_bad_sources_are_named(ks, tmp_path):
+    import h5py
+
+    data, grid = ks
+    U = data["clean"]
+    with pytest.raises(ShapeError, match="must be \\(time, 64"):
+        dc.FieldSource(U[:, :60], grid=grid, dt=DT)
+    with pytest.raises(MissingFileError, match="does not exist"):
+        dc.FieldSource((tmp_path / "none.h5", "u"), grid=grid, dt=DT)
+    with h5py.File(tmp_path / "a.h5", "w") as f:
+        f["v"] = U
+    with pytest.raises(UnknownNameError, match="no dataset 'u'"):
+        dc.FieldSource((tmp_path / "a.h5", "u"), grid=grid, dt=DT)
+    with pytest.raises(ShapeError, match="2 fields like the first"):
+        dc.FieldSource([np.stack([U, U], -1), U], grid=grid, dt=DT)
+    with pytest.raises(ParameterError, match="global method"):
+        dc.PDEDiscrepancyModel(differentiation_method=dc.SmoothingSpline()).fit(
+            dc.FieldSource(U, grid=grid, dt=DT), grid=grid)
+    bad = U.copy()
+    bad[300, 5] = np.nan
+    with pytest.raises(dc.errors.DataError, match="snapshots 292..336.*time row 300"):
+        model().fit(dc.FieldSource(bad, grid=grid, dt=DT, chunk_size=37, sample_snapshots=100),
+                    grid=grid)
