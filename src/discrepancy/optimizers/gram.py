@@ -37,9 +37,6 @@ class GramStatistics:
             GramStatistics), or ``None`` when not kept.
         segment: rows per contiguous segment of the fold assignment (row ``i`` of the data,
             counted over all trajectories in order, is in fold ``(i // segment) % n_folds``).
-        floor: fold errors below this fraction of the mean square derivative count as
-            numerical in the automatic threshold (``None``: the selection's default; PDE fits,
-            whose spatial derivatives are less exact, set a larger one).
     """
 
     p: int
@@ -52,7 +49,6 @@ class GramStatistics:
     signal: np.ndarray = field(init=False)
     count: int = 0
     folds: list | None = field(init=False, default=None)
-    floor: float | None = None
 
     def __post_init__(self):
         sizes = {"p": self.p, "n": self.n, "n_folds": self.n_folds, "segment": self.segment}
@@ -142,7 +138,7 @@ class GramStatistics:
         return out
 
     def empty_like(self) -> GramStatistics:
-        return GramStatistics(self.p, self.n, self.n_folds, self.segment, floor=self.floor)
+        return GramStatistics(self.p, self.n, self.n_folds, self.segment)
 
     def scaled(self, scale: np.ndarray) -> GramStatistics:
         """The statistics of the columns ``Θ * scale`` (folds included)."""

@@ -90,17 +90,14 @@ def cross_validated_errors(stats, i: int, support: np.ndarray, alpha: float) -> 
     return errors
 
 
-def select_thresholds(stlsq, stats, constraints=None, *, extra=None
-                      ) -> tuple[np.ndarray, np.ndarray, list[dict]]:
+def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.ndarray,
+                                                                 list[dict]]:
     """Per target, the selected STLSQ solution over the threshold path (within the
     ``constraints``' masks; their linear parts are for the caller's final refit).
 
     Returns ``(coef (n, p), thresholds (n,), selection)``; ``selection[i]`` describes the
     scored path of target ``i``: ``thresholds``, ``n_terms``, ``error`` (cross-validated
     mean squared error, or BIC), ``error_se``, ``criterion`` and the ``chosen`` index.
-    ``extra(gram, rhs_column)``: more candidate supports to score (e.g.
-    :func:`~discrepancy.optimizers.backward.backward_path`); their threshold is NaN and the
-    chosen one is refitted by least squares.
     """
     p, n = stats.rhs.shape
     coef, chosen_thresholds, selection = np.zeros((n, p)), np.zeros(n), []
@@ -115,13 +112,8 @@ def select_thresholds(stlsq, stats, constraints=None, *, extra=None
         mask = None if constraints is None else LinearConstraints(
             1, p, constraints.allowed[i:i + 1].copy())
         path = threshold_path(stlsq, stats.gram, stats.rhs[:, i], mask)
-        if extra is not None and mask is None:
-            seen = {support.tobytes() for _, support in path}
-            path += [(np.nan, s) for s in extra(stats.gram, stats.rhs[:, i])
-                     if s.tobytes() not in seen]
         if use_cv:
-            relative = FLOOR if stats.floor is None else stats.floor
-            floor = relative * max(stats.signal[i], stats.yy[i]) / stats.count
+            floor = FLOOR * max(stats.signal[i], stats.yy[i]) / stats.count
             scores = [np.maximum(cross_validated_errors(stats, i, s, alpha), floor)
                       for _, s in path]
             error = np.array([e.mean() for e in scores])
@@ -135,14 +127,11 @@ def select_thresholds(stlsq, stats, constraints=None, *, extra=None
             se = np.zeros_like(error)
             pick = int(np.argmin(error))
         threshold, support = path[pick]
-        if np.isnan(threshold):
-            coef[i] = _refit(stats.gram, stats.rhs[:, i], support, alpha)
-        else:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                solver = copy(stlsq)
-                solver.threshold = threshold
-                coef[i] = solver._solve_fixed(stats.gram, stats.rhs[:, i:i + 1], mask)[0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            solver = copy(stlsq)
+            solver.threshold = threshold
+            coef[i] = solver._solve_fixed(stats.gram, stats.rhs[:, i:i + 1], mask)[0]
         chosen_thresholds[i] = threshold
         selection.append({"thresholds": [t for t, _ in path],
                           "n_terms": [int(s.sum()) for _, s in path],

@@ -38,11 +38,9 @@ SIGNAL_OVER_NOISE = 10.0
 FILTER = 1e-2
 #: lines of the grid sampled per field and axis for the estimates
 LINES = 64
-#: time half-widths are at most 1/TIME_FRACTION of the record: the threshold is chosen by
-#: cross-validation over blocks of snapshots, which test functions spanning several blocks
-#: would correlate (Schrodinger's equation at 1 % noise, 301 samples: 19 spurious terms with
-#: 75-sample half-widths, the right two with 37)
-TIME_FRACTION = 8
+#: time half-widths are at most 1/TIME_FRACTION of the record, so that the record holds at
+#: least five cross-validation segments of one test function each (:mod:`.solve`)
+TIME_FRACTION = 10
 #: smallest half-width (samples), and per derivative order in space: the rectangle rule of
 #: the kernels stays accurate (∂⁴φ over analytic fields: 2e-6 relative with 20 points,
 #: 1e-3 with 12; ∂²φ: 2e-5 with 10, see tests/test_pde_weak.py)
@@ -98,12 +96,10 @@ def changepoint(lines: list[np.ndarray], sigma: float, periodic: bool) -> float:
     return float(above.max()) / (len(power) - 1)
 
 
-def half_width(fraction: float, power: int, limit: int, least: int = 0) -> int:
-    """Smallest half-width (samples, at least ``least`` and :data:`MIN_WIDTH`) whose bump's
-    transform at ``fraction`` of the Nyquist wavenumber is below :data:`FILTER` of its
-    value at 0."""
+def half_width(fraction: float, power: int, limit: int, least: int) -> int:
+    """Smallest half-width (samples, from ``least`` to ``limit``) whose bump's transform at
+    ``fraction`` of the Nyquist wavenumber is below :data:`FILTER` of its value at 0."""
     omega = np.pi * fraction
-    least = max(MIN_WIDTH, least)
     for width in range(least, max(least, limit) + 1):
         phi = bump(width, power, 0, 1.0)
         j = np.arange(-width, width + 1)
@@ -134,12 +130,15 @@ def choose(sample, grid, order: int, *, spatial=None, weak: FieldWeakForm | None
         fraction = max(changepoint([x for j in range(run.n_fields)
                                     for x in _lines([run], axis, j)], sigma, periodic)
                        for run in sample)
-        limit = (lengths[axis] // 2 - 1) if periodic else (lengths[axis] - 1) // 4
+        # a non-periodic axis loses a half-width at each end to the test functions
+        limit = (lengths[axis] // 2 - 1) if periodic else (lengths[axis] - 1) // 8
         if axis == 0:       # time: blocked cross-validation needs supports short of a fold
             limit = lengths[0] // TIME_FRACTION
         fractions.append(fraction)
-        widths.append(half_width(fraction, power, limit, 0 if axis == 0 else
-                                 SAMPLES_PER_ORDER * order))
+        # time: short records trade the quadrature's accuracy for five CV segments
+        least = max(3, min(MIN_WIDTH, limit)) if axis == 0 else max(
+            MIN_WIDTH, SAMPLES_PER_ORDER * order)
+        widths.append(half_width(fraction, power, limit, least))
     if weak is not None and weak.widths is not None:
         widths = [int(w) for w in weak.widths]
     stride = None if weak is None else weak.stride

@@ -23,13 +23,8 @@ from .prior import FieldPrior
 from .variables import FieldVariables
 from .weak import FieldWeakForm, WeakPlan, weak_rows
 
-#: cross-validation folds (as for trajectories)
-N_FOLDS = 5
-#: fold errors below this fraction of the mean square ``u_t`` count as numerical (relative
-#: RMS 1e-4; trajectories use 1e-12): spatial derivatives of sampled fields, and fields
-#: simulated by a solver of finite order, are rarely consistent to better, and a smaller
-#: floor let terms of size 1e-5 fit that inconsistency in clean two-field data
-FLOOR = 1e-8
+#: most cross-validation segments kept (each holds its own Gram statistics)
+MAX_SEGMENTS = 40
 
 
 def _noise(noise_std, n: int):
@@ -160,21 +155,23 @@ class FieldSetup:
         return Names(self.library.get_feature_names(), variables)
 
     @property
-    def fold_segment(self) -> int:
-        """Rows per cross-validation segment: whole snapshots, at least two windows of the
-        time method long when the data allow two segments per fold."""
-        halo = self.halo or 0
-        most = max(1, self.probe_snapshots // (2 * N_FOLDS))
-        return self.rows_per_snapshot * max(1, min(2 * (2 * halo + 1), most))
+    def segment_snapshots(self) -> int:
+        """Snapshots per cross-validation segment: one time window (``2 halo + 1``), or
+        more so that there are at most :data:`MAX_SEGMENTS` (see :mod:`.solve`)."""
+        window = 2 * (self.halo or 0) + 1
+        return max(window, -(-self.probe_snapshots // MAX_SEGMENTS))
 
     def new_statistics(self) -> GramStatistics:
+        """Empty statistics kept per segment of :attr:`segment_snapshots` snapshots (the
+        purged cross-validation's blocks, :mod:`discrepancy.pde.solve`)."""
         from ..accumulate import statistics_bytes
         from ..resources import SMALLER_LIBRARY, check_memory
 
         p, n = self.n_features, self.n_fields
-        check_memory(f"the Gram statistics of {p} library columns", statistics_bytes(p, n),
-                     SMALLER_LIBRARY)
-        return GramStatistics(p, n, N_FOLDS, self.fold_segment, floor=FLOOR)
+        segments = max(1, -(-self.probe_snapshots // self.segment_snapshots))
+        check_memory(f"the Gram statistics of {p} library columns in {segments} segments",
+                     statistics_bytes(p, n, segments), SMALLER_LIBRARY)
+        return GramStatistics(p, n, segments, self.rows_per_snapshot * self.segment_snapshots)
 
     def statistics(self, run: FieldRun, *, into: GramStatistics | None = None,
                    keep: slice | None = None) -> GramStatistics:

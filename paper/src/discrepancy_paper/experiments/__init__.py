@@ -19,6 +19,9 @@ EXPERIMENTS = {
     "noise-study": ("noise_study", "run"),
     "silverbox": ("silverbox", "run"),
     "cascaded-tanks": ("cascaded_tanks", "run"),
+    "pde-burgers": ("pde_examples", "run_burgers"),
+    "pde-reaction-diffusion": ("pde_examples", "run_reaction_diffusion"),
+    "pde-kuramoto-sivashinsky": ("pde_examples", "run_kuramoto_sivashinsky"),
 }
 
 
