@@ -84,6 +84,10 @@ def test_dask_threads_equal_in_memory(ks):
         with dask.config.set(scheduler="threads"):
             got = model().fit(da.from_array(U, chunks=(61, 64)), t=DT, grid=grid)
         same(got, ref)
+    runs = [data["noisy"][:200], data["noisy"][200:]]
+    with dask.config.set(scheduler="threads"):
+        got = model().fit([da.from_array(r, chunks=(45, 64)) for r in runs], t=DT, grid=grid)
+    same(got, model().fit(runs, t=DT, grid=grid))
 
 
 @pytest.mark.slow
@@ -117,8 +121,7 @@ def test_bad_sources_are_named(ks, tmp_path):
     with pytest.raises(ParameterError, match="global method"):
         dc.PDEDiscrepancyModel(differentiation_method=dc.SmoothingSpline()).fit(
             dc.FieldSource(U, grid=grid, dt=DT), grid=grid)
-    bad = U.copy()
-    bad[300, 5] = np.nan
-    with pytest.raises(dc.errors.DataError, match="snapshots 292..336.*time row 300"):
-        model().fit(dc.FieldSource(bad, grid=grid, dt=DT, chunk_size=37, sample_snapshots=100),
-                    grid=grid)
+    bad = np.concatenate([U, U])    # past the 512 snapshots the choices read first
+    bad[781, 5] = np.nan
+    with pytest.raises(dc.errors.DataError, match="run 0 snapshots 773..817.*time row 781"):
+        model().fit(dc.FieldSource(bad, grid=grid, dt=DT, chunk_size=37), grid=grid)

@@ -108,9 +108,11 @@ def half_width(fraction: float, power: int, limit: int, least: int) -> int:
     return max(least, limit)
 
 
-def choose(sample, grid, order: int, *, spatial=None, weak: FieldWeakForm | None = None):
+def choose(sample, grid, order: int, shortest: int, *, spatial=None,
+           weak: FieldWeakForm | None = None):
     """``(time_methods, spatial, choice)`` for the data ``sample`` (see the module
-    docstring); ``weak``: a weak form asked for, whose missing widths are chosen."""
+    docstring; ``shortest``: snapshots of the shortest run); ``weak``: a weak form asked
+    for, whose missing widths are chosen."""
     noise, spread = noise_levels(sample, grid)
     relative = noise / np.where(spread > 0, spread, 1.0)
     info = {"noise_std": noise.tolist(), "relative_noise": relative.tolist()}
@@ -124,7 +126,7 @@ def choose(sample, grid, order: int, *, spatial=None, weak: FieldWeakForm | None
     power = weak.power if weak is not None and weak.power is not None else max(8, 2 * order + 2)
     sigma = float(np.max(noise))
     fractions, widths = [], []
-    lengths = [min(r.n_samples for r in sample), *grid.shape]
+    lengths = [shortest, *grid.shape]
     for axis in range(grid.ndim + 1):
         periodic = axis > 0 and grid.periodic[axis - 1]
         fraction = max(changepoint([x for j in range(run.n_fields)

@@ -1,12 +1,13 @@
 """Fields on Dask: one task per time block, the p×p sums reduced as a tree.
 
 ``model.fit(u, t=dt, grid=grid)`` with ``u`` a ``dask.array`` ``(m, *grid.shape[, n])``
-chunked along time (the grid axes are made whole) maps every block, with ``halo``
-snapshots of its neighbours (``map_overlap``), to the packed Gram statistics of its own
-snapshots and sums them (``sum(split_every=...)``), so only p×p numbers come back. Which
-scheduler runs it is Dask's choice: threads, or a ``distributed`` cluster when a ``Client``
-is active; zarr arrays opened with ``dask.array.from_zarr`` are read by the workers
-themselves. The statistics, and the model, equal the in-memory fit's (to rounding).
+chunked along time (the grid axes are made whole), or a list of them (runs), maps every
+block, with ``halo`` snapshots of its neighbours (``map_overlap``), to the packed Gram
+statistics of its own snapshots and sums them (``sum(split_every=...)``), so only p×p
+numbers come back. Which scheduler runs it is Dask's choice: threads, or a
+``distributed`` cluster when a ``Client`` is active; zarr arrays opened with
+``dask.array.from_zarr`` are read by the workers themselves. The statistics, and the
+model, equal the in-memory fit's (to rounding).
 """
 from __future__ import annotations
 
@@ -16,10 +17,9 @@ from .._optional import require
 from ..data.fields import FieldRun, field_array
 from ..data.validation import check_times
 from ..errors import ParameterError, ShapeError, describe
+from .resolve import SAMPLE_SNAPSHOTS
 
 SPLIT_EVERY = 8
-#: snapshots the data-driven choices read from the start of the array
-SAMPLE_SNAPSHOTS = 512
 
 
 def _block(rows, u, *, setup, step, halo, n_total, offset):
@@ -39,27 +39,55 @@ def _block(rows, u, *, setup, step, halo, n_total, offset):
 
 
 def dask_statistics(model, u, *, t, grid, progress=None):
-    """``(setup, stats)`` of a dask array of fields (see the module docstring)."""
+    """``(setup, stats)`` of a dask array of fields, or a list of them (one per run; see
+    the module docstring)."""
     da = require("dask.array", purpose="fitting dask arrays")
-    if not isinstance(u, da.Array):
-        raise ParameterError(f"u must be a dask array here; got {describe(u)}")
+    runs = list(u) if isinstance(u, (list, tuple)) else [u]
     if np.ndim(t) != 0 and t is not None:
-        raise ParameterError("with a dask array of fields, t must be the time step")
+        raise ParameterError("with dask arrays of fields, t must be the time step")
     step = float(check_times("t", 1.0 if t is None else t, 2)[1])
-    if u.ndim == grid.ndim + 1:
-        u = u[..., None]
-    if u.ndim != grid.ndim + 2 or tuple(u.shape[1:-1]) != grid.shape:
-        raise ShapeError(f"u must be (time, {', '.join(map(str, grid.shape))}[, fields]); got "
-                         f"{describe(u)}")
-    m = u.shape[0]
-    sample = np.asarray(u[:min(m, SAMPLE_SNAPSHOTS)], dtype=float)
-    first = FieldRun(np.arange(len(sample)) * step, field_array("u", sample, grid), None, grid)
-    setup = model.make_setup(u.shape[-1], 0, grid, sample=[first], probe_snapshots=m)
-    halo = setup.halo
-    if halo is None:
+    runs = [_checked(k, a, grid, da) for k, a in enumerate(runs)]
+    if len({a.shape[-1] for a in runs}) != 1:
+        raise ShapeError("every run must hold the same number of fields")
+    sample, budget = [], SAMPLE_SNAPSHOTS
+    for a in runs:
+        if budget <= 0:
+            break
+        part = np.asarray(a[:min(a.shape[0], budget)], dtype=float)
+        sample.append(FieldRun(np.arange(len(part)) * step, field_array("u", part, grid),
+                               None, grid))
+        budget -= len(part)
+    setup = model.make_setup(runs[0].shape[-1], 0, grid, sample=sample,
+                             lengths=[a.shape[0] for a in runs])
+    if setup.halo is None:
         raise ParameterError("Dask fits need a local time method (the weak form, "
                              "SavitzkyGolay, FiniteDifference)")
+    graphs, offset = [], 0
+    for a in runs:
+        graphs.append(_run_graph(setup, a, step, offset, da))
+        offset += a.shape[0] * setup.rows_per_snapshot
+    total = _compute(sum(graphs[1:], graphs[0]), progress)
+    return setup, setup.new_statistics().from_vector(np.asarray(total))
+
+
+def _checked(k, a, grid, da):
+    if not isinstance(a, da.Array):
+        raise ParameterError(f"u[{k}] must be a dask array; got {describe(a)}")
+    if a.ndim == grid.ndim + 1:
+        a = a[..., None]
+    if a.ndim != grid.ndim + 2 or tuple(a.shape[1:-1]) != grid.shape or a.shape[0] == 0:
+        raise ShapeError(f"u[{k}] must be (time, {', '.join(map(str, grid.shape))}[, fields]); "
+                         f"got {describe(a)}")
+    return a
+
+
+def _run_graph(setup, u, step, offset, da):
+    """Dask array ``(L,)``: the packed statistics of one run, from rows ``offset`` on."""
+    m, halo = u.shape[0], setup.halo
     need = max(setup.min_samples, 2 * halo + 1)
+    if m < setup.min_samples:
+        raise ShapeError(f"a run of {m} snapshots is shorter than the {setup.min_samples} the "
+                         "time method needs")
     u = u.astype(float).rechunk({i: -1 for i in range(1, u.ndim)})
     if min(u.chunks[0]) < need:
         u = u.rechunk({0: _row_chunks(m, max(need, m // max(1, len(u.chunks[0]))), need)})
@@ -68,10 +96,9 @@ def dask_statistics(model, u, *, t, grid, progress=None):
     size = setup.new_statistics().to_vector().size
     blocks = da.map_overlap(_block, rows, u, depth={0: halo}, boundary="none", trim=False,
                             align_arrays=False, setup=setup, step=step, halo=halo, n_total=m,
-                            offset=0, meta=np.empty((0, 0)), dtype=float,
+                            offset=offset, meta=np.empty((0, 0)), dtype=float,
                             chunks=(1, size), drop_axis=list(range(2, u.ndim)))
-    total = _compute(blocks.sum(axis=0, split_every=SPLIT_EVERY), progress)
-    return setup, setup.new_statistics().from_vector(np.asarray(total))
+    return blocks.sum(axis=0, split_every=SPLIT_EVERY)
 
 
 def _row_chunks(m: int, size: int, need: int) -> tuple[int, ...]:

@@ -100,10 +100,13 @@ class PDEDiscrepancyModel(Estimator):
             from .distributed import dask_statistics
             setup, stats = dask_statistics(self, u, t=t, grid=grid, progress=progress)
         else:
+            from .resolve import first_snapshots
+
             runs = as_field_runs(u, t, grid, inputs)
             first = runs[0]
             setup = self.make_setup(first.n_fields, 0 if first.inputs is None else
-                                    first.inputs.shape[-1], grid, sample=runs)
+                                    first.inputs.shape[-1], grid, sample=first_snapshots(runs),
+                                    lengths=[r.n_samples for r in runs])
             stats = setup.new_statistics()
             for run in runs:
                 if run.n_samples < setup.min_samples:
@@ -113,15 +116,16 @@ class PDEDiscrepancyModel(Estimator):
         return self.fit_statistics(stats, setup)
 
     def make_setup(self, n_fields: int, n_inputs: int, grid: Grid, *, sample=None,
-                   probe_snapshots: int | None = None) -> FieldSetup:
+                   lengths=None) -> FieldSetup:
         """The frozen set-up for ``n_fields`` fields and ``n_inputs`` inputs on ``grid``
-        (``sample``: runs that data-driven choices look at)."""
+        (``sample``: the data's first snapshots, which data-driven choices look at;
+        ``lengths``: snapshots per run)."""
         from .resolve import resolve_setup
 
         self._validate_params()
         if not isinstance(grid, Grid):
             raise ParameterError(f"grid must be a discrepancy.Grid; got {describe(grid)}")
-        return resolve_setup(self, n_fields, n_inputs, grid, sample, probe_snapshots)
+        return resolve_setup(self, n_fields, n_inputs, grid, sample, lengths)
 
     @classmethod
     def prior_only(cls, prior, grid: Grid, *, field_names=None, input_names=None,
@@ -272,8 +276,10 @@ class PDEDiscrepancyModel(Estimator):
 
 
 def _is_dask(u) -> bool:
+    """A dask array, or a non-empty list of them (runs)."""
     from ..data.chunks import is_dask
-    return is_dask(u)
+    items = list(u) if isinstance(u, (list, tuple)) else [u]
+    return bool(items) and all(is_dask(a) for a in items)
 
 
 class _ExportView:

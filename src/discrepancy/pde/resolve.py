@@ -47,9 +47,11 @@ def default_library(prior_order: int, n_fields: int, ndim: int) -> PDELibrary:
 
 
 def resolve_setup(model, n_fields: int, n_inputs: int, grid, sample=None,
-                  probe_snapshots: int | None = None) -> FieldSetup:
+                  lengths=None) -> FieldSetup:
     """The set-up of ``model`` for ``n_fields`` fields and ``n_inputs`` inputs on ``grid``;
-    ``sample``: runs that data-driven choices look at."""
+    ``sample``: the first snapshots of the data, which data-driven choices look at
+    (:func:`first_snapshots`); ``lengths``: the snapshots of every run (default: those of
+    the sample)."""
     fields = resolve_names("field_names", model.field_names, n_fields, "u", one="u")
     inputs = resolve_names("input_names", model.input_names, n_inputs, "f", one="f")
     taken = set(grid.names) | {"t"}
@@ -69,15 +71,35 @@ def resolve_setup(model, n_fields: int, n_inputs: int, grid, sample=None,
     library = copy.deepcopy(library).fit(variables.names)
     optimizer = copy.deepcopy(get_optimizer(model.optimizer))
     optimizer._validate_params()
-    time_methods, spatial, choice = resolve_methods(model, grid, sample, n_fields, order)
-    if probe_snapshots is None:
-        probe_snapshots = sum(r.n_samples for r in sample) if sample else 1000
+    if lengths is None:
+        lengths = [r.n_samples for r in sample] if sample else [1000]
+    time_methods, spatial, choice = resolve_methods(model, grid, sample, n_fields, order,
+                                                    min(lengths))
     return FieldSetup(variables, grid, prior, library, optimizer, time_methods, spatial,
-                      choice, int(probe_snapshots))
+                      choice, int(sum(lengths)))
 
 
-def resolve_methods(model, grid, sample, n_fields: int, order: int):
-    """``(time_methods, spatial, choice)`` from the model's differentiation parameters."""
+#: snapshots (from the start of the data, over runs in order) that choices look at
+SAMPLE_SNAPSHOTS = 512
+
+
+def first_snapshots(runs, budget: int = SAMPLE_SNAPSHOTS) -> list:
+    """The first ``budget`` snapshots of ``runs`` (whole runs first, the last one cut):
+    the same rows in memory, streamed or on Dask, so the same choices."""
+    out = []
+    for run in runs:
+        if budget <= 0:
+            break
+        k = min(run.n_samples, budget)
+        out.append(run if k == run.n_samples else type(run)(
+            run.t[:k], run.u[:k], None if run.inputs is None else run.inputs[:k], run.grid))
+        budget -= k
+    return out
+
+
+def resolve_methods(model, grid, sample, n_fields: int, order: int, shortest: int):
+    """``(time_methods, spatial, choice)`` from the model's differentiation parameters
+    (``shortest``: snapshots of the shortest run)."""
     from .auto import choose
 
     method = model.differentiation_method
@@ -86,13 +108,13 @@ def resolve_methods(model, grid, sample, n_fields: int, order: int):
         if not sample:
             raise ParameterError("differentiation_method='auto' chooses from the data; give "
                                  "the data (fit) or a method")
-        return choose(sample, grid, order, spatial=spatial)
+        return choose(sample, grid, order, shortest, spatial=spatial)
     if isinstance(method, str) and method == "weak":
         method = FieldWeakForm()
     if isinstance(method, FieldWeakForm):
         method._validate_params()
         if sample and (method.data_driven or spatial is None or method.noise_std is None):
-            return choose(sample, grid, order, spatial=spatial, weak=method)
+            return choose(sample, grid, order, shortest, spatial=spatial, weak=method)
         if method.data_driven:
             raise ParameterError("a weak form with widths=None chooses them from the data; "
                                  "give the data (fit) or widths")

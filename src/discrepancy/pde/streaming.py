@@ -7,7 +7,7 @@ test function needs), keeps the rows of the chunk's own snapshots, and adds thei
 statistics; rows at a run's true ends are those of the in-memory fit, so the sums, and the
 model, equal the in-memory ones (to rounding). Memory is a few chunks of the field and the
 jet of one chunk, whatever the run's length. Choices made from the data (smoothing, test
-functions) look at the first ``sample_snapshots`` snapshots of the first run.
+functions) look at the first 512 snapshots (over runs in order), as in memory.
 """
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ from ..constraints import Integral, Interval, validate_params
 from ..data.fields import FieldRun, Grid, field_array
 from ..data.validation import check_times
 from ..errors import MissingFileError, ParameterError, ShapeError, UnknownNameError, describe
+from .resolve import SAMPLE_SNAPSHOTS
 
 #: bytes of field data per chunk when ``chunk_size`` is not given
 CHUNK_BYTES = 32 * 2**20
@@ -34,22 +35,18 @@ class FieldSource:
         grid: the :class:`~discrepancy.Grid`.
         dt: time step of every run.
         chunk_size: snapshots per chunk (default: about 32 MB of fields).
-        sample_snapshots: snapshots data-driven choices look at (first run).
     """
 
-    def __init__(self, arrays, *, grid: Grid, dt: float, chunk_size: int | None = None,
-                 sample_snapshots: int = 512):
+    def __init__(self, arrays, *, grid: Grid, dt: float, chunk_size: int | None = None):
         if not isinstance(grid, Grid):
             raise ParameterError(f"grid must be a discrepancy.Grid; got {describe(grid)}")
-        validate_params("FieldSource", {"chunk_size": chunk_size,
-                                        "sample_snapshots": sample_snapshots},
-                        {"chunk_size": [None, Interval(Integral, 1)],
-                         "sample_snapshots": [Interval(Integral, 3)]})
+        validate_params("FieldSource", {"chunk_size": chunk_size},
+                        {"chunk_size": [None, Interval(Integral, 1)]})
         self.grid, self.dt = grid, float(check_times("dt", dt, 2)[1])
         items = arrays if isinstance(arrays, list) else [arrays]
         if not items:
             raise ShapeError("FieldSource needs at least one run")
-        self.items, self.sample_snapshots = items, int(sample_snapshots)
+        self.items = items
         shapes = [self._shape(i, a) for i, a in enumerate(items)]
         self.n_fields = shapes[0][1]
         if any(s[1] != self.n_fields for s in shapes):
@@ -115,9 +112,14 @@ def stream_statistics(model, source: FieldSource, *, progress=None):
     """``(setup, stats)``: the Gram statistics of every snapshot of ``source``."""
     from tqdm.auto import tqdm
 
-    first = source.read(0, 0, min(source.lengths[0], source.sample_snapshots))
-    setup = model.make_setup(source.n_fields, 0, source.grid, sample=[first],
-                             probe_snapshots=source.n_snapshots)
+    sample, budget = [], SAMPLE_SNAPSHOTS
+    for run, m in enumerate(source.lengths):
+        if budget <= 0:
+            break
+        sample.append(source.read(run, 0, min(m, budget)))
+        budget -= min(m, budget)
+    setup = model.make_setup(source.n_fields, 0, source.grid, sample=sample,
+                             lengths=source.lengths)
     stats, halo = setup.new_statistics(), setup.halo
     if halo is None:
         raise ParameterError(f"{setup.time_methods[0]!r} is a global method; streamed fits "
