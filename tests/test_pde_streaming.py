@@ -125,3 +125,48 @@ def test_bad_sources_are_named(ks, tmp_path):
     bad[781, 5] = np.nan
     with pytest.raises(dc.errors.DataError, match="run 0 snapshots 773..817.*time row 781"):
         model().fit(dc.FieldSource(bad, grid=grid, dt=DT, chunk_size=37), grid=grid)
+
+
+CHILD = """
+import sys, numpy as np, zarr
+import discrepancy as dc
+from discrepancy.symbolic import symbol
+def rss(key):
+    return next(int(l.split()[1]) for l in open('/proc/self/status') if l.startswith(key)) / 1024
+x = np.linspace(0, 2 * np.pi, 512, endpoint=False)
+grid = dc.Grid(x, periodic=True)
+names = sorted(zarr.open_group(sys.argv[1], mode='r').array_keys())
+source = dc.FieldSource([(sys.argv[1], n) for n in names], grid=grid, dt=0.005, chunk_size=100)
+model = dc.PDEDiscrepancyModel(prior=[-symbol('u') * symbol('u_x')])
+model.make_setup(1, 0, grid, sample=[source.read(0, 0, 400)])   # imports and plans, warmed
+before = rss('VmRSS')
+model.fit(source, grid=grid, progress=False)
+print(rss('VmHWM') - before, model.equations(4)[0])
+"""
+
+
+@pytest.mark.slow
+def test_streamed_fit_holds_a_fraction_of_the_field_in_memory(tmp_path):
+    """160 MB of fields on disk; the streamed fit's peak memory grows by a fraction of it."""
+    import subprocess
+    import sys
+
+    import zarr
+
+    x = np.linspace(0, 2 * np.pi, 512, endpoint=False)
+    t = np.arange(1000) * 0.005
+    group = zarr.open_group(str(tmp_path / "f.zarr"), mode="w")
+    rng = np.random.default_rng(0)
+    for r in range(40):                  # exact viscous Burgers (Cole-Hopf), nu = 0.05
+        k = np.arange(1, 6)
+        b = rng.uniform(-1, 1, 5)
+        b *= 0.8 / np.abs(b).sum()
+        decay = np.exp(-0.05 * k ** 2 * t[:, None]) * b
+        angle = k * x[:, None] + rng.uniform(0, 6, 5)
+        u = 0.1 * (decay * k) @ np.sin(angle).T / (1 + decay @ np.cos(angle).T)
+        group.create_array(f"run{r:02d}", shape=u.shape, dtype="f8")[:] = u
+    out = subprocess.run([sys.executable, "-c", CHILD, str(tmp_path / "f.zarr")],
+                         capture_output=True, text=True, check=True).stdout.split(maxsplit=1)
+    grown, equation = float(out[0]), out[1].strip()
+    assert equation == "prior + 0.0500 u_xx"
+    assert grown < 0.25 * 40 * 1000 * 512 * 8 / 2 ** 20, grown
