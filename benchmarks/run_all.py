@@ -17,8 +17,8 @@ from pathlib import Path
 HERE = Path(__file__).parent
 BENCHES = ["bench_fit", "bench_simulate", "bench_streaming", "bench_dask", "bench_dequantise",
            "bench_block_fit", "bench_mpc", "bench_estimation",
-           "bench_energy_blind"]
-BIG = {"bench_streaming", "bench_dask"}
+           "bench_energy_blind", "bench_pde"]
+BIG = {"bench_streaming", "bench_dask", "bench_pde"}
 
 
 def replace_section(text: str, name: str, body: str) -> str:

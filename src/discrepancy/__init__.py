@@ -12,6 +12,7 @@ Quick start::
 from . import errors, estimation, io, metrics, selection, systems
 from ._version import __version__  # noqa: F401
 from .data.chunks import Chunk
+from .data.fields import Grid
 from .data.sources import CSVFiles, HDF5Source, NPZFiles, ZarrSource
 from .differentiation import (
     AutoSmoothing,
@@ -25,8 +26,9 @@ from .differentiation import (
     TrendFiltered,
     WeakForm,
 )
+from .differentiation.spatial import SpatialFiniteDifference, SpatialSavitzkyGolay, SpatialSpectral
 from .energy import DissipationDiscrepancy, EnergyDiscrepancy
-from .libraries import CustomLibrary, FourierLibrary, PolynomialLibrary
+from .libraries import CustomLibrary, FourierLibrary, PDELibrary, PolynomialLibrary
 from .models import Constraints, DiscrepancyModel, load_model
 from .optimizers import (
     SR3,
@@ -38,14 +40,17 @@ from .optimizers import (
     LinearConstraints,
     PriorOnly,
 )
+from .pde import FieldSource, FieldWeakForm, PDEDiscrepancyModel
 from .selection import choose_procedure
 
 __all__ = [
     "AutoSmoothing", "CSVFiles", "Chunk", "ConstrainedSR3", "Constraints", "CustomLibrary",
     "Dequantised", "DiscrepancyModel", "DissipationDiscrepancy", "EnergyDiscrepancy",
-    "EnsembleOptimizer", "FiniteDifference", "FourierLibrary", "GramStatistics", "HDF5Source",
-    "Kalman", "Lasso", "LinearConstraints", "NPZFiles", "PolynomialLibrary", "PriorOnly", "SR3",
-    "STLSQ", "SavitzkyGolay", "SmoothingSpline", "Spectral", "Spline", "TrendFiltered", "WeakForm",
-    "ZarrSource", "choose_procedure", "errors", "estimation", "io", "load_model", "metrics",
-    "selection", "systems"
+    "EnsembleOptimizer", "FieldSource", "FieldWeakForm", "FiniteDifference", "FourierLibrary",
+    "GramStatistics", "Grid", "HDF5Source", "Kalman", "Lasso", "LinearConstraints", "NPZFiles",
+    "PDEDiscrepancyModel", "PDELibrary", "PolynomialLibrary", "PriorOnly", "SR3", "STLSQ",
+    "SavitzkyGolay", "SmoothingSpline", "SpatialFiniteDifference", "SpatialSavitzkyGolay",
+    "SpatialSpectral", "Spectral", "Spline", "TrendFiltered", "WeakForm", "ZarrSource",
+    "choose_procedure", "errors", "estimation", "io", "load_model", "metrics", "selection",
+    "systems"
 ]

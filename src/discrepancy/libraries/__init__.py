@@ -2,7 +2,8 @@
 from .base import BaseLibrary, ConcatLibrary, FeatureLibrary, TensorLibrary
 from .custom import CustomLibrary
 from .fourier import FourierLibrary
+from .pde import PDELibrary
 from .polynomial import PolynomialLibrary
 
 __all__ = ["BaseLibrary", "ConcatLibrary", "CustomLibrary", "FeatureLibrary", "FourierLibrary",
-           "PolynomialLibrary", "TensorLibrary"]
+           "PDELibrary", "PolynomialLibrary", "TensorLibrary"]

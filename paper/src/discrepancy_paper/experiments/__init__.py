@@ -21,6 +21,9 @@ EXPERIMENTS = {
     "cascaded-tanks": ("cascaded_tanks", "run"),
     "prediction-error": ("prediction_error", "run"),
     "blind-selection": ("blind_selection", "run"),
+    "pde-burgers": ("pde_examples", "run_burgers"),
+    "pde-reaction-diffusion": ("pde_examples", "run_reaction_diffusion"),
+    "pde-kuramoto-sivashinsky": ("pde_examples", "run_kuramoto_sivashinsky"),
 }
 
 

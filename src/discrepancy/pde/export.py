@@ -1,0 +1,59 @@
+"""Exact export of a fitted PDE model to sympy and LaTeX.
+
+The jet symbols (``u_xx``) print in LaTeX as subscripts (``u_{xx}``); ``derivatives=True``
+gives the same equations with ``sympy.Derivative`` of functions ``u(t, x)`` instead, for
+further symbolic work (substitution, linearisation, a solver of your own).
+"""
+from __future__ import annotations
+
+import sympy as sp
+
+from ..libraries.pde import parse_derivative
+from ..models.export import _part, discrepancy_expressions
+from ..symbolic import symbol
+
+
+def to_sympy(model, part=None, derivatives: bool = False) -> list[sp.Expr]:
+    from .model import _ExportView
+
+    view = _ExportView(model)
+    part = _part(view, part)
+    g = discrepancy_expressions(view)
+    exprs = g if part == "discrepancy" or not model.prior_.is_symbolic else [
+        f + gi for f, gi in zip(model.prior_.expressions, g, strict=True)]
+    return [as_derivatives(e, model) for e in exprs] if derivatives else exprs
+
+
+def as_derivatives(expr: sp.Expr, model) -> sp.Expr:
+    """``expr`` with jet symbols replaced by derivatives of ``u(t, x, ...)``."""
+    grid = model.grid_
+    coords = [symbol(c) for c in grid.names]
+    args = [symbol("t"), *coords]
+    functions = {f: sp.Function(f)(*args) for f in model.field_names_}
+    swap = {}
+    for s in expr.free_symbols:
+        if s.name in functions:
+            swap[s] = functions[s.name]
+            continue
+        found = parse_derivative(s.name, model.field_names_, grid.names)
+        if found:
+            field, alpha = found
+            swap[s] = sp.Derivative(functions[field], *[(c, a) for c, a in
+                                                        zip(coords, alpha, strict=True) if a])
+    return expr.xreplace(swap)
+
+
+def to_latex(model, precision: int = 4, part=None) -> str:
+    from ..constraints import Integral, Interval, validate_params
+
+    validate_params("to_latex", {"precision": precision},
+                    {"precision": [Interval(Integral, 1, 17)]})
+    exprs = to_sympy(model, part)
+    lines = []
+    discrepancy_only = part == "discrepancy" or (model.prior is not None
+                                                 and not model.prior_.is_symbolic)
+    for name, e in zip(model.field_names_, exprs, strict=True):
+        rounded = e.xreplace({f: sp.Float(f, precision) for f in e.atoms(sp.Float)})
+        lhs = ("\\delta " if discrepancy_only else "") + sp.latex(symbol(f"{name}_t"))
+        lines.append(f"{lhs} &= {sp.latex(rounded) if e != 0 else '0'}")
+    return "\\begin{aligned}\n" + " \\\\\n".join(lines) + "\n\\end{aligned}"
