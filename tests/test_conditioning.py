@@ -15,7 +15,8 @@ def test_an_input_equal_to_a_state_is_named():
     x = np.sin(t)[:, None]
     model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(1, include_bias=False),
                                 optimizer=dc.STLSQ(threshold=0.0, alpha=0.0))
-    with pytest.warns(IllConditionedWarning, match=r"equation of x1 \(terms x1, u: condition number inf"):
+    named = r"equation of x1 \(terms x1, u: condition number inf"
+    with pytest.warns(IllConditionedWarning, match=named):
         model.fit(x, t=t, u=x.copy(), x_dot=np.cos(t)[:, None])
     assert model.conditioning_["x1"] > 1e10
 

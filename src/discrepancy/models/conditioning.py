@@ -51,8 +51,9 @@ def warn_if_ill_conditioned(gram: np.ndarray, coef: np.ndarray, feature_names,
         condition, terms = collinear_terms(gram, row != 0)
         report[name] = condition
         if condition > LIMIT:
-            found.append(f"the equation of {name} (terms {', '.join(feature_names[j] for j in terms)}: "
-                         f"condition number {condition:.2g})")
+            named = ", ".join(feature_names[j] for j in terms)
+            found.append(f"the equation of {name} (terms {named}: condition number "
+                         f"{condition:.2g})")
     if found:
         warnings.warn("nearly collinear terms on these data, whose coefficients the data do "
                       "not determine (a split between them is arbitrary, to about condition "
