@@ -13,6 +13,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
+# The operation classes are plumbing of the filters and the prediction-error fit: only the
+# finite-difference step is part of the documented API.
+__all__ = ["FD_STEP"]
+
 #: relative step of the central differences of the numpy backend (cube root of eps)
 FD_STEP = float(np.finfo(float).eps ** (1 / 3))
 
