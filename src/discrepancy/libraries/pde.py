@@ -21,7 +21,7 @@ import numpy as np
 import sympy as sp
 
 from ..constraints import InstanceOf, Integral, Interval, Predicate
-from ..errors import ParameterError, UnknownNameError
+from ..errors import UnknownNameError
 from ..symbolic import symbol
 from .base import ConcatLibrary, FeatureLibrary, TensorLibrary, check_names
 from .custom import CustomLibrary
@@ -177,8 +177,3 @@ class PDELibrary(FeatureLibrary):
         theta = np.hstack(parts)
         return theta if len(self._keep) == theta.shape[1] else theta[:, self._keep]
 
-
-def check_derivative_order(order, owner: str) -> int:
-    if not Interval(Integral, 0, 8).is_satisfied_by(order):
-        raise ParameterError(f"{owner}: derivative orders go from 0 to 8; got {order!r}")
-    return int(order)

@@ -231,7 +231,3 @@ def check_method(method: str, symbolic: bool, grid) -> str:
     if method == "auto":
         return "etdrk4" if periodic and symbolic else "BDF"
     return method
-
-
-def variables_for(setup, order: int) -> FieldVariables:
-    return setup.variables.with_order(max(order, setup.variables.order))
