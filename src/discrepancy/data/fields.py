@@ -63,22 +63,28 @@ class Grid:
 
     @property
     def ndim(self) -> int:
+        """Number of spatial axes (1 to 3)."""
         return len(self.coordinates)
 
     @property
     def shape(self) -> tuple[int, ...]:
+        """Points per axis, ``(len(x), len(y), ...)``: the spatial part of a field's shape."""
         return tuple(len(c) for c in self.coordinates)
 
     @property
     def size(self) -> int:
+        """Points per snapshot: the product of :attr:`shape`."""
         return int(np.prod(self.shape))
 
     @property
     def spacing(self) -> tuple[float, ...]:
+        """Step between neighbouring points per axis, in the length units of the coordinates."""
         return tuple(float((c[-1] - c[0]) / (len(c) - 1)) for c in self.coordinates)
 
     @property
     def period(self) -> tuple[float, ...]:
+        """``len(x) * dx`` per axis: the length after which a periodic axis wraps around (in
+        length units; defined on every axis, meaningful on the periodic ones)."""
         return tuple(len(c) * h for c, h in zip(self.coordinates, self.spacing, strict=True))
 
     def mesh(self) -> tuple[np.ndarray, ...]:
@@ -133,10 +139,12 @@ class FieldRun:
 
     @property
     def n_samples(self) -> int:
+        """Number of snapshots ``m`` (the length of the time axis)."""
         return self.u.shape[0]
 
     @property
     def n_fields(self) -> int:
+        """Number of fields ``n`` (the last axis of :attr:`u`)."""
         return self.u.shape[-1]
 
 

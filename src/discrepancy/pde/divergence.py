@@ -39,11 +39,15 @@ class Jet:
         return parse_derivative(s.name, self.fields, self.coordinates)
 
     def shifted(self, field: str, alpha) -> sp.Symbol:
+        """The symbol of ``∂^α`` of ``field`` (``alpha``: one derivative order per axis):
+        ``u_xx`` for ``alpha=(2,)``, the field's own symbol when ``alpha`` is all zeros."""
         if not any(alpha):
             return symbol(field)
         return symbol(derivative_name(field, alpha, self.coordinates))
 
     def order(self, expr: sp.Expr) -> int:
+        """Highest total derivative order of the jet variables in ``expr`` (0 when it holds no
+        derivative)."""
         return max((sum(a[1]) for s in expr.free_symbols if (a := self.alpha(s))), default=0)
 
     def total_derivative(self, expr: sp.Expr, axis: int) -> sp.Expr | None:

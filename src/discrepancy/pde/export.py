@@ -14,6 +14,10 @@ from ..symbolic import symbol
 
 
 def to_sympy(model, part=None, derivatives: bool = False) -> list[sp.Expr]:
+    """One sympy expression per field for ``u_t`` of a fitted PDE model (see
+    :meth:`~discrepancy.PDEDiscrepancyModel.to_sympy`): the hybrid ``N_m + g`` or, with
+    ``part="discrepancy"`` (the default when the prior is a callable), ``g`` alone; in
+    jet symbols (``u_xx``), or with ``derivatives=True`` in ``sympy.Derivative`` form."""
     from .model import _ExportView
 
     view = _ExportView(model)
@@ -44,6 +48,10 @@ def as_derivatives(expr: sp.Expr, model) -> sp.Expr:
 
 
 def to_latex(model, precision: int = 4, part=None) -> str:
+    r"""The fitted PDE model's equations as a LaTeX ``aligned`` block, one ``u_t &= ...`` line
+    per field with floats rounded to ``precision`` significant digits (see
+    :meth:`~discrepancy.PDEDiscrepancyModel.to_latex`); a discrepancy alone is written
+    ``\delta u_t``."""
     from ..constraints import Integral, Interval, validate_params
 
     validate_params("to_latex", {"precision": precision},

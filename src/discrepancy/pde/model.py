@@ -237,14 +237,19 @@ class PDEDiscrepancyModel(Estimator):
     # ------------------------------------------------------------------ output
     @property
     def complexity(self) -> int:
+        """Number of nonzero coefficients of ``g`` (PySINDy's ``complexity``)."""
         self.check_is_fitted()
         return int(np.count_nonzero(self.coef_))
 
     def coefficients(self) -> np.ndarray:
+        """``Ξ`` as ``(n_fields, n_features)``, the column order of :meth:`get_feature_names`:
+        a copy, so editing it leaves the model unchanged."""
         self.check_is_fitted()
         return self.coef_.copy()
 
     def get_feature_names(self) -> list[str]:
+        """Names of the library's ``p`` terms over the jet variables (``u``, ``u_x``, ...,
+        inputs), the column order of :meth:`coefficients`."""
         self.check_is_fitted()
         return [feature_name(e, self.setup_.variables.names) for e in self.feature_expressions_]
 

@@ -60,6 +60,8 @@ class FieldPrior:
 
     @property
     def is_symbolic(self) -> bool:
+        """True when the prior is sympy expressions (exact: exported, integrated by parts in
+        the weak form); False for a callable or no prior."""
         return self.expressions is not None
 
     @property

@@ -63,22 +63,28 @@ class FieldSetup:
 
     @property
     def field_names(self) -> list[str]:
+        """Names of the fields, in the order of the last axis of the data."""
         return list(self.variables.fields)
 
     @property
     def input_names(self) -> list[str]:
+        """Names of the inputs (empty when there are none)."""
         return list(self.variables.inputs)
 
     @property
     def n_fields(self) -> int:
+        """Number of fields ``n``."""
         return len(self.variables.fields)
 
     @property
     def n_features(self) -> int:
+        """Number of library columns ``p`` (candidate terms per equation)."""
         return self.library.n_features_
 
     @property
     def weak(self) -> FieldWeakForm | None:
+        """The :class:`~discrepancy.pde.weak.FieldWeakForm` when the fit uses the weak form,
+        ``None`` in the pointwise form."""
         method = self.time_methods[0]
         return method if isinstance(method, FieldWeakForm) else None
 
@@ -90,6 +96,7 @@ class FieldSetup:
 
     @property
     def min_samples(self) -> int:
+        """Fewest time samples a run needs: the largest demand of the time methods."""
         return max(m.min_samples for m in self.time_methods)
 
     @cached_property
@@ -103,6 +110,8 @@ class FieldSetup:
 
     @property
     def rows_per_snapshot(self) -> int:
+        """Regression rows each snapshot contributes: every grid point in the pointwise form,
+        the test-function centres on the grid in the weak form."""
         if self.weak is None:
             return self.grid.size
         from .weak import centres

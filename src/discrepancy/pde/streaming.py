@@ -57,6 +57,7 @@ class FieldSource:
 
     @property
     def n_snapshots(self) -> int:
+        """Snapshots (time samples) over all runs of the source."""
         return sum(self.lengths)
 
     def _shape(self, i, item) -> tuple[int, int]:

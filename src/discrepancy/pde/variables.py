@@ -36,13 +36,17 @@ class FieldVariables:
 
     @property
     def names(self) -> list[str]:
+        """Variable names in column order: the fields, then their derivatives (``u_x``,
+        ``u_xx``, ...; see :attr:`derivatives`), then the inputs."""
         return [*self.fields, *(d[2] for d in self.derivatives), *self.inputs]
 
     @property
     def n_variables(self) -> int:
+        """Number of variables, the last axis of :meth:`jet`."""
         return len(self.names)
 
     def with_order(self, order: int) -> FieldVariables:
+        """The same fields, coordinates and inputs with derivatives up to ``order``."""
         return FieldVariables(self.fields, self.coordinates, self.inputs, order)
 
     def jet(self, u: np.ndarray, inputs: np.ndarray | None, grid, methods, *,

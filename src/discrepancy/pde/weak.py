@@ -69,14 +69,18 @@ class FieldWeakForm(Estimator):
 
     @property
     def data_driven(self) -> bool:
+        """True when the widths are chosen from the data at each fit (``widths=None``)."""
         return self.widths is None
 
     @property
     def halo(self) -> int:
+        """Time samples on each side of a centre that its test function covers (the time
+        half-width ``widths[0]``); only defined once the widths are known."""
         return int(self.widths[0])
 
     @property
     def min_samples(self) -> int:
+        """Fewest time samples a run needs: one whole test-function support, ``2 widths[0] + 1``."""
         return 2 * int(self.widths[0]) + 1
 
     def strides(self, grid) -> list[int]:
