@@ -85,10 +85,14 @@ class OutputFeedback:
 
     @property
     def estimates(self) -> np.ndarray:
+        """``(k, n)``: the filtered states the law acted on, one row per sample so far (after
+        each measurement update), in the units of the states."""
         return np.array(self._estimates)
 
     @property
     def stds(self) -> np.ndarray:
+        """``(k, n)``: the filter's standard deviation of each estimate in :attr:`estimates`
+        (square roots of the covariance's diagonal), same units."""
         return np.array(self._stds)
 
     def estimation_errors(self, run) -> dict:

@@ -56,6 +56,8 @@ def step_expressions(ca, kind: str, ops: CasadiOps, n: int, k: int, *, Q, R, sub
 
 
 def flat_update(ca, update):
+    """The update's ``(x, P, e, S, nll)`` as one CasADi column ``[x; vec P; e; vec S; nll]``
+    (the update layout of the module docstring)."""
     x, P, e, S, nll = update
     return ca.vertcat(x, ca.vec(P), e, ca.vec(S), nll)
 

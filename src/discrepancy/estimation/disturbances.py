@@ -39,6 +39,9 @@ def disturbed_equations(disturbances, state_names) -> list[int]:
 
 
 def disturbance_names(state_names, equations) -> list[str]:
+    """Names of the disturbance states of the equations ``equations`` (indices into
+    ``state_names``): ``"d_" + state name``; :class:`~discrepancy.errors.ParameterError`
+    when one would clash with a state's name."""
     names = [PREFIX + state_names[i] for i in equations]
     clash = sorted(set(names) & set(state_names))
     if clash:

@@ -52,10 +52,12 @@ class Dynamics:
 
     @property
     def n(self) -> int:
+        """Number of states ``n``."""
         return len(self.state_names)
 
     @property
     def r(self) -> int:
+        """Number of inputs ``r`` (0 without inputs)."""
         return len(self.input_names)
 
 

@@ -93,10 +93,12 @@ class KalmanFilter:
 
     @property
     def state_names(self) -> list[str]:
+        """Names of the ``n`` states, the order of the state vector ``x``."""
         return list(self.dynamics.state_names)
 
     @property
     def output_names(self) -> list[str]:
+        """Names of the measured outputs, the order of a measurement ``y``."""
         return list(self.measurement.names)
 
     # ------------------------------------------------------------------ online

@@ -110,6 +110,8 @@ def unscented_weights(n: int, alpha: float, beta: float, kappa: float):
 
 
 def sigma_points(ops, x, P, scale):
+    """The ``2n + 1`` sigma points as columns ``(n, 2n + 1)``: ``x``, then ``x + scale ·``
+    each column of a square root of ``P``, then ``x - scale ·`` each."""
     root = scale * ops.psd_sqrt(P)
     n = P.shape[0]
     return ops.columns([x, *(x + ops.column(root, j) for j in range(n)),
@@ -131,6 +133,9 @@ def ukf_predict(ops, x, P, stages, h, Q, substeps: int, discrete: bool, weights)
 
 
 def ukf_update(ops, x, P, y, w, R, weights):
+    """Unscented update with the measurement ``y`` (zeros where ``w`` is 0): the outputs of
+    the sigma points give the innovation's mean, covariance (plus ``R``) and ``Cov(x, y)``;
+    returns ``(x, P, e, S, nll)`` as :func:`masked_update`."""
     scale, wm, wc = weights
     X = sigma_points(ops, x, P, scale)
     Y = ops.h_columns(X)

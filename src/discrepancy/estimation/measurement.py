@@ -51,4 +51,5 @@ class Measurement:
 
     @property
     def measured(self) -> set[int]:
+        """Indices of the states that appear in an output (directly or inside an expression)."""
         return self._map.measured

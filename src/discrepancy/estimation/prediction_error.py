@@ -62,6 +62,8 @@ class PredictionErrorProblem:
 
     # ---------------------------------------------------------------- pieces
     def likelihood(self, support) -> InnovationLikelihood:
+        """The :class:`~discrepancy.estimation.likelihood.InnovationLikelihood` of the terms
+        ``support`` (``(n, p)`` bool), built once per support and cached."""
         key = support.tobytes()
         if key not in self._likelihoods:
             self._likelihoods[key] = InnovationLikelihood(
@@ -80,6 +82,8 @@ class PredictionErrorProblem:
                 zip(self.data, self.beliefs, rows, strict=True)]
 
     def split(self, noise):
+        """``(q, r)`` from ``noise`` ``(N + k,)``: the process-noise levels of the ``N`` filter
+        states (per √s) and the measurement-noise standard deviations of the ``k`` outputs."""
         return noise[:self.N], noise[self.N:]
 
     # ---------------------------------------------------------------- fitting
@@ -188,6 +192,8 @@ class PredictionErrorProblem:
         self.coef_scale = rate[:, None] / np.where(theta > 0, theta, 1.0)[None, :]
 
     def importance(self, coef) -> np.ndarray:
+        """``(n, p)``: the size of each coefficient of ``coef`` ``(n, p)`` in scaled units
+        (``|coef| / coef_scale``, see :meth:`set_coef_scale`), so terms compare."""
         return np.abs(coef) / self.coef_scale
 
 
@@ -233,6 +239,8 @@ def measurement_noise_guess(records) -> np.ndarray:
 
 
 def check_records(records):
+    """Raise :class:`~discrepancy.errors.DataError` when a record is shorter than
+    ``4 * BURN_IN`` samples (the first :data:`BURN_IN` only let the filter settle)."""
     for rec in records:
         if rec.m < 4 * BURN_IN:
             from ..errors import DataError

@@ -44,6 +44,7 @@ class SupportScore:
 
     @property
     def n_terms(self) -> int:
+        """Number of terms in the support."""
         return int(self.support.sum())
 
 
@@ -59,6 +60,8 @@ def block_means(values: list[np.ndarray], blocks: int = SCORE_BLOCKS) -> np.ndar
 
 
 def mean_and_se(means: np.ndarray) -> tuple[float, float]:
+    """``(mean, standard error)`` of block means ``(b,)``: the standard error is
+    ``std / √b`` (0 for a single block); ``(inf, inf)`` when any mean is not finite."""
     if not np.all(np.isfinite(means)):
         return np.inf, np.inf
     se = float(means.std(ddof=1) / np.sqrt(len(means))) if len(means) > 1 else 0.0
