@@ -109,6 +109,8 @@ class Statistics:
         return xi, float(loss)
 
     def offset(self, subset, xi) -> float:
+        """The intercept ``c = mean_y - mean_f @ xi`` for coefficients ``xi`` ``(k,)`` of the
+        terms ``subset``, in the target's units."""
         return float(self.mean_y - self.mean_f[list(subset)] @ xi)
 
     def restricted(self, columns, *, shift_y: float = 0.0, shift_f=0.0) -> Statistics:

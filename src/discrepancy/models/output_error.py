@@ -81,6 +81,8 @@ class OutputErrorFit:
 
     # ---------------------------------------------------------------- the solve
     def layout(self, rows):
+        """The :class:`~discrepancy.models.segments.SegmentLayout` of shooting segments over
+        ``rows`` (per record, the samples whose residuals count), built once per ``rows``."""
         key = tuple(w.tobytes() for w in rows)
         if key not in self._layouts:
             self._layouts[key] = layout(self.records, rows, self.segment_length,

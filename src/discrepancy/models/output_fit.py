@@ -252,6 +252,9 @@ def _spread(model, fit) -> np.ndarray:
 
 
 def warn_if_not_converged(fit, coef, x0s, rows):
+    """The RMS scaled output error of ``coef`` and initial states ``x0s`` on ``rows``
+    (:meth:`~discrepancy.models.output_error.OutputErrorFit.error`), with a
+    ``UserWarning`` when it is not finite (the fitted model's simulation diverges)."""
     import warnings
 
     err = fit.error(coef, x0s, rows)

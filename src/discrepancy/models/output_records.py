@@ -37,6 +37,8 @@ def _is_int(value) -> bool:
 
 
 def check_substeps(substeps) -> int:
+    """``substeps`` as an int, or :class:`~discrepancy.errors.ParameterError` unless it is a
+    positive integer (RK4 steps per sample interval)."""
     if not _is_int(substeps) or substeps < 1:
         raise ParameterError(f"substeps must be a positive integer (RK4 steps per sample "
                              f"interval); got {substeps!r}")
@@ -62,6 +64,11 @@ def records_of(y, t, u, substeps, hold) -> tuple[list[Record], int]:
 
 def check_options(*, max_terms=None, holdout=0.25, tolerance=None, segment_length="auto",
                   n_jobs=1, jit="auto"):
+    """Refuse, with a :class:`~discrepancy.errors.ParameterError` naming the option, a
+    ``max_terms`` that is not a positive integer or ``None``, a ``holdout`` outside
+    ``[0.05, 0.5]``, a ``tolerance`` outside ``[0, 1]`` (or ``None``), a ``segment_length``
+    other than ``"auto"`` or a positive integer (samples), an ``n_jobs`` other than ``None``
+    or a positive integer, and a ``jit`` other than ``True``, ``False`` or ``"auto"``."""
     if max_terms is not None and (not _is_int(max_terms) or max_terms < 1):
         raise ParameterError(f"max_terms must be a positive integer or None; got {max_terms!r}")
     if not isinstance(holdout, (int, float)) or isinstance(holdout, bool) or \
@@ -82,6 +89,9 @@ def check_options(*, max_terms=None, holdout=0.25, tolerance=None, segment_lengt
 
 
 def n_states_of(model, x0) -> int:
+    """The number of states ``n``: from ``model.state_names``, else the length of a prior given
+    as a list of expressions, else the last axis of ``x0``; a
+    :class:`~discrepancy.errors.ParameterError` when none of them says."""
     if model.state_names is not None:
         return 1 if isinstance(model.state_names, str) else len(model.state_names)
     if isinstance(model.prior, (list, tuple)):

@@ -73,6 +73,8 @@ class FittedRegion:
                       ExtrapolationWarning, stacklevel=stacklevel)
 
     def to_data(self) -> dict:
+        """JSON-ready ``{"variables": names, "low": [...], "high": [...]}`` (what the model file
+        keeps; :meth:`from_data` reads it back)."""
         return {"variables": list(self.names), "low": self.low.tolist(),
                 "high": self.high.tolist()}
 

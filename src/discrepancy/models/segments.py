@@ -42,6 +42,7 @@ class SegmentLayout:
 
     @property
     def count(self) -> int:
+        """Number of segments ``N``."""
         return len(self.record)
 
     @property

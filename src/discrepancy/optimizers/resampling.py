@@ -35,6 +35,7 @@ class Rows:
 
     @property
     def n_rows(self) -> int:
+        """Number of rows ``m``."""
         return self.theta.shape[0]
 
     def weighted(self) -> tuple[np.ndarray, np.ndarray]:
@@ -45,6 +46,8 @@ class Rows:
         return self.theta * root, self.y * root
 
     def scaled(self, scale: np.ndarray) -> Rows:
+        """The same rows with each column of ``theta`` multiplied by ``scale`` ``(p,)``
+        (``y``, ``signal``, weights and folds unchanged)."""
         return Rows(self.theta * scale[None, :], self.y, self.signal, self.weight, self.fold)
 
     def __add__(self, other: Rows) -> Rows:

@@ -54,6 +54,7 @@ def start(optimizer, paths) -> tuple[int, ...]:
 
 
 def prior_only(paths) -> tuple[int, ...]:
+    """The prior-alone candidate as path indices: the last (empty) support of every equation."""
     return tuple(len(path) - 1 for path in paths)
 
 
@@ -68,6 +69,7 @@ def neighbours(centre: tuple[int, ...], paths) -> list[tuple[int, ...]]:
 
 
 def support_of(candidate: tuple[int, ...], paths) -> np.ndarray:
+    """The terms of ``candidate`` (one path index per equation) as a bool array ``(n, p)``."""
     return np.array([paths[i][j] for i, j in enumerate(candidate)])
 
 

@@ -74,10 +74,12 @@ class ForecastSelection:
 
     @property
     def prior_only(self) -> bool:
+        """True when the chosen candidate has no terms: the prior alone was chosen."""
         return self.n_terms[self.chosen] == 0
 
     @property
     def prior_index(self) -> int:
+        """Index of the prior-alone candidate in the per-candidate lists."""
         return self.labels.index("prior alone")
 
     def improvement(self) -> float:

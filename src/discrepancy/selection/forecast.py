@@ -65,10 +65,12 @@ class Origins:
 
     @property
     def n_windows(self) -> int:
+        """Number of forecast windows ``W``."""
         return len(self.x0)
 
     @property
     def max_steps(self) -> int:
+        """Most forecast steps ``S`` a window may take (of ``stride`` samples each)."""
         return self.h.shape[1]
 
     def steps_held(self) -> np.ndarray:

@@ -52,6 +52,7 @@ class Window:
 
     @property
     def full(self) -> bool:
+        """True when the window holds ``size`` samples and takes no more."""
         return self.filled >= self.size
 
     def append(self, t, x, u) -> int:
@@ -68,6 +69,8 @@ class Window:
         return k
 
     def trimmed(self) -> Window:
+        """A new window of only the ``filled`` samples held (views of these arrays;
+        ``size = filled``)."""
         u = None if self.u is None else self.u[:self.filled]
         return Window(self.fold, self.origin, self.filled, self.t[:self.filled],
                       self.x[:self.filled], u, self.filled)
@@ -182,6 +185,8 @@ class HeldOutWindows:
                 setattr(self, name, theirs.copy() if mine is None else op(mine, theirs))
 
     def empty_like(self) -> HeldOutWindows:
+        """A new collector with the same settings (segment, folds, samples before an origin,
+        longest lead, most windows) and no windows or extremes yet."""
         return HeldOutWindows(self.segment, self.n_folds, self.pre, self.max_lead,
                               self.max_windows)
 

@@ -55,6 +55,8 @@ class ProcedureChoice:
     horizon: int | None = None
 
     def table(self) -> str:
+        """A text table, one line per candidate: its name, terms, mean forecast error (scaled
+        squared error) and standard error over the origins, the chosen one marked."""
         lines = [f"{'candidate':<32} {'terms':>5} {'forecast error':>14} {'± s.e.':>9}"]
         for name, row in self.scores.items():
             mark = "  <- chosen" if name == self.chosen else ""
