@@ -138,7 +138,7 @@ class FieldSetup:
         m = run.u.shape[0]
         smooth, rate = np.empty_like(run.u), np.empty_like(run.u)
         for j, method in enumerate(self.time_methods):
-            s, r = method(run.u[..., j].reshape(m, -1), run.t)
+            s, r = method.smooth_and_differentiate(run.u[..., j].reshape(m, -1), run.t)
             smooth[..., j], rate[..., j] = s.reshape(run.u.shape[:-1]), r.reshape(
                 run.u.shape[:-1])
         return smooth, rate
