@@ -13,13 +13,30 @@ from ..models.export import _part, discrepancy_expressions
 from ..symbolic import symbol
 
 
+class _ExportView:
+    """The attributes the ODE export helpers read, for a fitted PDE model."""
+
+    def __init__(self, model):
+        self.model = model
+        self.coef_ = model.coef_
+        self.feature_expressions_ = model.feature_expressions_
+        self.prior = model.prior
+        self.prior_ = model.prior_
+        self.state_names_ = model.field_names_
+        self.variable_names_ = model.setup_.variables.names
+
+    def get_feature_names(self):
+        return self.model.get_feature_names()
+
+    def check_is_fitted(self):
+        self.model.check_is_fitted()
+
+
 def to_sympy(model, part=None, derivatives: bool = False) -> list[sp.Expr]:
     """One sympy expression per field for ``u_t`` of a fitted PDE model (see
     :meth:`~discrepancy.PDEDiscrepancyModel.to_sympy`): the hybrid ``N_m + g`` or, with
     ``part="discrepancy"`` (the default when the prior is a callable), ``g`` alone; in
     jet symbols (``u_xx``), or with ``derivatives=True`` in ``sympy.Derivative`` form."""
-    from .model import _ExportView
-
     view = _ExportView(model)
     part = _part(view, part)
     g = discrepancy_expressions(view)

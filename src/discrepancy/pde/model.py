@@ -256,6 +256,7 @@ class PDEDiscrepancyModel(Estimator):
     def equations(self, precision: int = 3) -> list[str]:
         """Right-hand sides as text: ``prior - 1.000 u_xx``."""
         from ..models.export import equations
+        from .export import _ExportView
         return equations(_ExportView(self), precision)
 
     def print(self, precision: int = 3) -> None:
@@ -285,22 +286,3 @@ def _is_dask(u) -> bool:
     from ..data.chunks import is_dask
     items = list(u) if isinstance(u, (list, tuple)) else [u]
     return bool(items) and all(is_dask(a) for a in items)
-
-
-class _ExportView:
-    """The attributes the ODE export helpers read, for a fitted PDE model."""
-
-    def __init__(self, model):
-        self.model = model
-        self.coef_ = model.coef_
-        self.feature_expressions_ = model.feature_expressions_
-        self.prior = model.prior
-        self.prior_ = model.prior_
-        self.state_names_ = model.field_names_
-        self.variable_names_ = model.setup_.variables.names
-
-    def get_feature_names(self):
-        return self.model.get_feature_names()
-
-    def check_is_fitted(self):
-        self.model.check_is_fitted()
