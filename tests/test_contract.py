@@ -20,8 +20,10 @@ import sympy as sp
 from sklearn.base import clone
 
 import discrepancy as dc
+from discrepancy import FieldWeakForm
 from discrepancy.base import Estimator
 from discrepancy.differentiation import Differentiator
+from discrepancy.differentiation.spatial import SpatialDifferentiator
 from discrepancy.errors import NotFittedError, ParameterError
 
 T = np.arange(2001) * 0.01
@@ -54,6 +56,29 @@ def _differentiator_case(make, x=X):
     return Case(make, lambda d: d, lambda d: np.hstack(d(x, T[:len(x)])), lambda d: None)
 
 
+XS = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+GRID_STEP = XS[1] - XS[0]
+# the heat equation u_t = 0.1 u_xx, two decaying modes on a periodic grid: (time, x)
+FIELD = (np.exp(-0.1 * T[:60])[:, None] * np.sin(XS)[None, :]
+         + 0.5 * np.exp(-0.4 * T[:60])[:, None] * np.sin(2 * XS + 1)[None, :])
+
+
+def _spatial_case(make):
+    return Case(make, lambda d: d, lambda d: d.derivative(FIELD, 1, 2, GRID_STEP, True),
+                lambda d: None)
+
+
+def _pde_fit(model):
+    return model.fit(FIELD, t=0.01, grid=dc.Grid(XS, periodic=True))
+
+
+def _pde_library_case(make):
+    names = ["u", "u_x", "u_xx"]
+    return Case(make, lambda lib: lib.fit(names),
+                lambda lib: lib.transform(np.c_[FIELD[0], FIELD[1], FIELD[2]]),
+                lambda lib: lib.transform(np.zeros((2, 3))))
+
+
 def _model_fit(model):
     return model.fit(X, t=T, x_dot=X_DOT)
 
@@ -81,6 +106,19 @@ CASES = {
     "Lasso": _optimizer_case(lambda: dc.Lasso(alpha=1e-4, unbias=True)),
     "SR3": _optimizer_case(lambda: dc.SR3(reg_weight_lam=0.01)),
     "PriorOnly": _optimizer_case(dc.PriorOnly),
+    "ConstrainedSR3": _optimizer_case(lambda: dc.ConstrainedSR3(reg_weight_lam=0.01)),
+    "EnsembleOptimizer": _optimizer_case(lambda: dc.EnsembleOptimizer(
+        dc.STLSQ(threshold=0.1), bagging=True, n_models=5, random_state=0)),
+    "SpatialSpectral": _spatial_case(dc.SpatialSpectral),
+    "SpatialFiniteDifference": _spatial_case(lambda: dc.SpatialFiniteDifference(order=4)),
+    "SpatialSavitzkyGolay": _spatial_case(dc.SpatialSavitzkyGolay),
+    "PDELibrary": _pde_library_case(lambda: dc.PDELibrary(derivative_order=1)),
+    "FieldWeakForm": Case(dc.FieldWeakForm, lambda w: w, lambda w: _pde_fit(
+        dc.PDEDiscrepancyModel(feature_library=dc.PDELibrary(derivative_order=2),
+                               differentiation_method=w)).coef_, lambda w: None),
+    "PDEDiscrepancyModel": Case(
+        lambda: dc.PDEDiscrepancyModel(feature_library=dc.PDELibrary(derivative_order=2)),
+        _pde_fit, lambda m: m.coef_, lambda m: m.coefficients()),
     "FiniteDifference": _differentiator_case(dc.FiniteDifference),
     "SavitzkyGolay": _differentiator_case(lambda: dc.SavitzkyGolay(window_length=31)),
     "Spline": _differentiator_case(lambda: dc.Spline(s=1e-4)),
@@ -160,7 +198,9 @@ def test_repr_names_the_class_and_the_changed_arguments(name):
 
 
 @pytest.mark.parametrize("name", [n for n in IDS  # differentiators hold no fitted state
-                                  if not isinstance(CASES[n].make(), Differentiator)])
+                                  if not isinstance(CASES[n].make(), (Differentiator,
+                                                                      SpatialDifferentiator,
+                                                                      FieldWeakForm))])
 def test_use_before_fit_is_a_not_fitted_error(name):
     case = CASES[name]
     with pytest.raises(NotFittedError):

@@ -493,9 +493,12 @@ def test_statistics_of_trajectories_summed_equal_the_fit_of_their_list(vdp_data,
                                 differentiation_method=dc.SavitzkyGolay(21))
     whole = clone(model).fit(parts, t=vdp_data.dt)
     setup = model.make_setup(2, 0)
-    stats = setup.new_statistics()
+    stats, summed = setup.new_statistics(), setup.new_statistics()
     for tr in as_trajectories(parts, vdp_data.dt):
-        stats += setup.statistics(tr)
+        setup.statistics(tr, into=stats)     # rows numbered on, as a list's fit numbers them
+        summed += setup.statistics(tr)       # each piece numbered from 0: same sums
+    np.testing.assert_allclose(summed.gram, stats.gram, rtol=1e-12)
+    np.testing.assert_allclose(summed.rhs, stats.rhs, rtol=1e-12)
     model.fit_statistics(stats, setup)
     np.testing.assert_allclose(model.coef_, whole.coef_, rtol=1e-12, atol=1e-14)
     assert model.statistics_.count == len(x)
