@@ -96,10 +96,6 @@ class ShortRecordWarning(UserWarning):
 class NameConventionWarning(UserWarning):
     """A name refers to a default variable name that means another variable in PySINDy's
     0-based names (``x1`` is the first state here, the second in PySINDy)."""
-class InitialStateWarning(UserWarning):
-    """Even the best of several starts fits the measured outputs poorly: the estimated
-    initial state (and a simulation from it) should not be trusted. The message gives the
-    RMS error relative to the outputs' spread."""
 
 
 class CoarseSamplingWarning(UserWarning):

@@ -2,35 +2,28 @@
 
 When only some states (or functions of them) are recorded, the derivative of every state
 is not available and the usual regression cannot be formed. Here the hybrid model is
-simulated with the measured input (RK4 at the input's stage times, see
-:mod:`discrepancy.models.shooting`) and its coefficients and initial states are chosen to
-minimise the simulation error of the recorded outputs.
-
-Multiple shooting: every record is cut into segments (:mod:`discrepancy.models.segments`),
-each simulated from a state of its own with its exact sensitivities; the fit adds the
-condition that each segment ends where the next begins and solves the constrained least
-squares by Levenberg–Marquardt on the sparse KKT system
-(:mod:`discrepancy.models.gauss_newton`). At the solution the trajectory is continuous, so
-the answer is single shooting's (the simulation error from the initial states); on the way
-the short segments keep the problem nearly linear, and they run in parallel.
+simulated from an estimated initial state with the measured input (RK4 at the input's
+stage times, see :mod:`discrepancy.models.shooting`) and its coefficients and initial
+states are chosen to minimise the simulation error of the recorded outputs (Gauss–Newton
+with a trust region: scipy's ``least_squares`` on exact CasADi derivatives).
 
 Sparsity: the whole library is fitted first (with a small ridge on coefficients scaled to
 their equation), then terms are removed one at a time, the least important first, each
-support refitted from the last (coefficients and segment states: warm starts). With
-``threshold="auto"`` the supports are fitted on the first part of every record and scored
-by how well they forecast the rest (free simulation of the held-out end); the sparsest
-support within ``tolerance`` of the best forecast is refitted on all the data. A fixed
-threshold instead drops terms whose coefficients stay below it.
+support refitted. With ``threshold="auto"`` the supports are fitted on the first part of
+every record and scored by how well they forecast the rest (free simulation of the held-out
+end); the sparsest support within ``tolerance`` of the best forecast is refitted on all the
+data. A fixed threshold instead drops terms whose coefficients stay below it.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import warnings
 
 import numpy as np
+import scipy.optimize
 
-from ..resources import check_memory, n_bytes
-from . import gauss_newton
-from .segments import DEFAULT_LENGTH, layout
+from ..data.trajectory import as_trajectories
+from ..errors import DataError, ParameterError, ShapeError
+from .inputs import check_hold, stage_inputs
 
 #: relative ridge on the scaled coefficients while supports are compared
 RIDGE = 1e-6
@@ -40,179 +33,107 @@ NEGLIGIBLE = 1e-3
 SCORE_BLOCKS = 8
 #: contiguous blocks per record for the coefficients' covariance
 COVARIANCE_BLOCKS = 20
-#: bytes of sensitivities held at once while a fit is evaluated
-EVALUATION_BYTES = 2**25
 
 
-@dataclass
-class Solution:
-    """A fitted support: coefficients ``(n, p)``, initial states ``(records, n)``, the
-    cost (sum of squared scaled residuals, the ridge included), the segment states it
-    ended at (for warm starts) and whether the solver met its tolerances."""
+class _Record:
+    """One trajectory: times, outputs ``(m, k)``, stage inputs and step lengths."""
 
-    coef: np.ndarray
-    x0s: np.ndarray
-    cost: float
-    starts: np.ndarray | None = None
-    converged: bool = True
+    def __init__(self, trajectory, n_inputs, substeps, hold):
+        self.t, self.y, self.u = trajectory.t, trajectory.x, trajectory.u
+        self.h = np.diff(self.t)
+        self.stages = None if not n_inputs else stage_inputs(self.u, self.t, n_inputs,
+                                                              substeps, hold=hold)
+        self.m = len(self.t)
 
 
 class OutputErrorFit:
-    """The pieces of one fit: model discretisation, records, output map and scales.
+    """The pieces of one fit: model discretisation, records, output map and scales."""
 
-    ``parameters``: indices (into the flattened ``Ξ``) of the coefficients that may be
-    fitted; sensitivities are computed for these."""
-
-    def __init__(self, setup, records, out_map, shooting, allowed, *, segment_length="auto"):
+    def __init__(self, setup, records, out_map, shooting, allowed):
         self.setup, self.records, self.out_map = setup, records, out_map
         self.shooting, self.allowed = shooting, allowed
-        self.parameters = np.flatnonzero(allowed.ravel())
         y = np.vstack([r.y for r in records])
         spread = y.std(axis=0)
         self.y_scale = np.where(spread > 0, spread, np.maximum(np.abs(y).max(axis=0), 1.0))
         self.n, self.p = setup.n_states, setup.n_features
-        self.segment_length = DEFAULT_LENGTH if segment_length == "auto" else segment_length
         self.coef_scale = np.ones(self.n * self.p)      # set from the data by set_coef_scale
-        self.state_scale = np.ones(self.n)              # likewise
         self.bounds = (np.full(self.n, -np.inf), np.full(self.n, np.inf))   # of x0
         self.fixed = np.zeros((self.n, self.p))   # coefficients outside the fitted support
-        self.evaluations = 0
-        self._layouts = {}
 
-    # ---------------------------------------------------------------- the solve
-    def layout(self, rows):
-        """The :class:`~discrepancy.models.segments.SegmentLayout` of shooting segments over
-        ``rows`` (per record, the samples whose residuals count), built once per ``rows``."""
-        key = tuple(w.tobytes() for w in rows)
-        if key not in self._layouts:
-            self._layouts[key] = layout(self.records, rows, self.segment_length,
-                                        self.shooting)
-        return self._layouts[key]
-
-    def coefficients(self, theta, index) -> np.ndarray:
-        """``(n, p)``: the fixed part with the scaled ``theta`` of ``index`` put in."""
-        coef = self.fixed.ravel().copy()
-        coef[index] = theta * self.coef_scale[index]
-        return coef.reshape(self.n, self.p)
-
-    def solve(self, support, coef, x0s, rows, ridge, *, max_evaluations: int = 200,
-              starts=None) -> Solution:
-        """Least squares of ``support`` from ``coef`` ``(n, p)`` and ``x0s``, or from the
-        segment ``starts`` of an earlier solution on the same ``rows`` (``"measured"``:
-        segments start from the measured states, see :meth:`segment_starts`)."""
+    # ---------------------------------------------------------------- residuals
+    def _parts(self, theta, support):
         index = np.flatnonzero(support.ravel())
-        lay = self.layout(rows)
-        params = self.parameters if len(index) else self.parameters[:0]
-        if isinstance(starts, str) or starts is None or len(starts) != lay.count:
-            starts = self.segment_starts(lay, coef, x0s, measured=isinstance(starts, str))
-        first = lay.first_segments()
-        starts = starts.copy()
-        starts[first] = np.clip(x0s, *self.bounds)
-        lower, upper = np.full_like(starts, -np.inf), np.full_like(starts, np.inf)
-        lower[first], upper[first] = self.bounds
-        sup = np.searchsorted(params, index)
-        with np.errstate(all="ignore"):
-            result = gauss_newton.solve(
-                lambda s, th: self.evaluate(lay, index, params, sup, s, th, ridge), starts,
-                coef.ravel()[index] / self.coef_scale[index], lay.links,
-                state_scale=self.state_scale, lower=lower, upper=upper,
-                continuous=lambda s, th: self.continuous(lay, index, s, th, ridge),
-                max_evaluations=max_evaluations)
-        self.evaluations += result.evaluations
-        coef = self.coefficients(result.theta, index)
-        return Solution(coef, result.states[first].copy(), result.cost, result.states,
-                        result.converged)
+        coef = self.fixed.ravel().copy()
+        coef[index] = theta[:len(index)] * self.coef_scale[index]
+        x0s = theta[len(index):].reshape(len(self.records), self.n)
+        return index, coef, x0s
 
-    def segment_starts(self, lay, coef, x0s, *, measured: bool = False) -> np.ndarray:
-        """Segment states from simulating each record from its initial state; where the
-        simulation diverged, the measured states of the sample (the others 0). With
-        ``measured``, every segment after a record's first starts from the measured
-        states of its sample (the unmeasured ones from the simulation): the classic start
-        of multiple shooting, close to the data wherever the model is still wrong."""
-        starts = np.empty((lay.count, self.n))
-        for i, record in enumerate(self.records):
-            mine = lay.starts_of(i)
-            end = int(lay.first[mine[-1]] + lay.steps[mine[-1]])
-            stages = record.stages[:end] if record.stages is not None else None
-            states = self.shooting.simulate(x0s[i], stages, record.h[:end], coef)
-            chosen = states[lay.first[mine]]
-            bad = ~np.all(np.isfinite(chosen), axis=1)
-            for j in np.flatnonzero(bad):
-                chosen[j] = self.out_map.initial_guess(record.y[lay.first[mine[j]]])
-            for j in range(1, len(mine)) if measured else ():
-                chosen[j] = self.out_map.states_from(record.y[lay.first[mine[j]]], chosen[j])
-            starts[mine] = chosen
-        return starts
-
-    def continuous(self, lay, index, starts, theta, ridge):
-        """``(segment starts, cost)`` of the continuous trajectory of every record from
-        its first segment's state (a plain simulation), for :func:`gauss_newton.solve`."""
-        coef = self.coefficients(theta, index)
-        out, cost = starts.copy(), 0.0
-        total = max(float(lay.weight.sum()) * self.out_map.k, 1.0)
-        for i, record in enumerate(self.records):
-            mine = lay.starts_of(i)
-            end = int(lay.first[mine[-1]] + lay.steps[mine[-1]])
-            stages = record.stages[:end] if record.stages is not None else None
-            states = self.shooting.simulate(starts[mine[0]], stages, record.h[:end], coef)
-            w = np.zeros(end + 1)
-            for j in mine:
-                span = slice(lay.first[j], lay.first[j] + lay.length + 1)
-                w[span] = np.maximum(w[span], lay.weight[j, :len(w[span])])
-            e = (self.out_map(states) - record.y[:end + 1]) / self.y_scale
-            cost += float(np.sum(w[:, None] * e ** 2)) / total
-            out[mine] = states[lay.first[mine]]
+    def residuals(self, theta, support, rows, ridge, *, jacobian: bool = True):
+        """Residual vector (and its Jacobian) for ``theta`` = [scaled coefficients of
+        ``support``, x0 of every record]; ``rows[i]``: the samples of record ``i`` fitted.
+        Without ``jacobian`` only the simulation runs (trial steps)."""
+        index, coef, x0s = self._parts(theta, support)
+        total = sum(int(r.sum()) for r in rows) * self.out_map.k
+        parts, jacobians = [], []
+        width = len(index) + x0s.size
+        for i, (record, fit_rows) in enumerate(zip(self.records, rows, strict=True)):
+            if not jacobian:
+                states = self.shooting.simulate(x0s[i], record.stages, record.h, coef)
+                parts.append(((self.out_map(states[fit_rows]) - record.y[fit_rows])
+                              / self.y_scale).ravel())
+                continue
+            sens = self.shooting.sensitivities(x0s[i], record.stages, record.h, coef)
+            states = sens.states[fit_rows]
+            parts.append(((self.out_map(states) - record.y[fit_rows]) / self.y_scale).ravel())
+            dh = self.out_map.jacobian(states) / self.y_scale[None, :, None]   # (m, k, n)
+            jac = np.zeros((states.shape[0], self.out_map.k, width))
+            jac[:, :, :len(index)] = np.einsum("mkn,mnc->mkc", dh,
+                                               sens.d_coef[fit_rows][:, :, index]) \
+                * self.coef_scale[index]
+            offset = len(index) + i * self.n
+            jac[:, :, offset:offset + self.n] = np.einsum("mkn,mnj->mkj", dh,
+                                                          sens.d_x0[fit_rows])
+            jacobians.append(jac.reshape(-1, width))
+        scale = 1 / np.sqrt(max(total, 1))
+        r = np.concatenate(parts) * scale
         if ridge and len(index):
-            cost += ridge * float(theta @ theta)
-        return out, (cost if np.isfinite(cost) else np.inf)
+            r = np.concatenate([r, np.sqrt(ridge) * theta[:len(index)]])
+        diverged = not np.all(np.isfinite(r))
+        if diverged:
+            r = np.full_like(r, 1e6)                       # a diverging trial is rejected
+        if not jacobian:
+            return r
+        J = np.vstack(jacobians) * scale
+        if ridge and len(index):
+            J = np.vstack([J, np.sqrt(ridge) * np.eye(len(index), width)])
+        if diverged:
+            return r, np.zeros_like(J)                     # nowhere to go from here
+        # an infinite slope (sqrt at 0) or an undefined one at a kink counts as flat there
+        return r, np.nan_to_num(J, nan=0.0, posinf=0.0, neginf=0.0)
 
-    def evaluate(self, lay, index, params, sup, starts, theta, ridge):
-        """:class:`~discrepancy.models.gauss_newton.Evaluation` at segment ``starts`` and
-        scaled coefficients ``theta`` of ``index``: cost, normal-equation blocks and segment
-        ends, with sensitivities to ``params`` (``sup``: where ``index`` is in them). The
-        Jacobian is formed a batch of segments at a time, never whole."""
-        coef = self.coefficients(theta, index)
-        N, L, n, q, k = lay.count, lay.length, self.n, len(index), self.out_map.k
-        total = max(float(lay.weight.sum()) * k, 1.0)
-        weight = lay.weight / np.sqrt(total)
-        ev = gauss_newton.Evaluation(0.0, np.zeros((N, n, n)), np.zeros((N, n, q)),
-                                     np.zeros((q, q)), np.zeros((N, n)), np.zeros(q),
-                                     np.zeros((N, n)), np.zeros((N, n, n)),
-                                     np.zeros((N, n, q)))
-        scale = self.coef_scale[index]
-        width = self.shooting.width(params)
-        batch = max(1, EVALUATION_BYTES // (8 * (L + 1) * (width + k * (n + q))))
-        for part in lay.batches(batch):
-            span = slice(part.start * L, part.stop * L)
-            sens = self.shooting.segments(starts[part], lay.cols[span], lay.lengths[span],
-                                          coef, params)
-            flat = sens.states.reshape(-1, n)
-            w = weight[part][..., None]
-            e = (self.out_map(flat).reshape(-1, L + 1, k) - lay.y[part]) / self.y_scale * w
-            if not np.all(np.isfinite(e)):
-                return gauss_newton.Evaluation(np.inf)
-            dh = self.out_map.jacobian(flat).reshape(-1, L + 1, k, n) * \
-                (w / self.y_scale)[..., None]
-            j_s = _flat_where_undefined(np.einsum("btkn,btnj->btkj", dh, sens.d_x0))
-            j_p = _flat_where_undefined(np.einsum("btkn,btnq->btkq", dh,
-                                                  sens.d_coef[..., sup]) * scale)
-            ev.cost += float(np.sum(e ** 2))
-            ev.h_ss[part] = np.einsum("btki,btkj->bij", j_s, j_s)
-            ev.h_sp[part] = np.einsum("btki,btkq->biq", j_s, j_p)
-            ev.h_pp += np.einsum("btkq,btkr->qr", j_p, j_p)
-            ev.g_s[part] = np.einsum("btki,btk->bi", j_s, e)
-            ev.g_p += np.einsum("btkq,btk->q", j_p, e)
-            at = np.arange(part.stop - part.start), lay.steps[part]
-            ev.ends[part] = sens.states[at]
-            ev.a[part] = _flat_where_undefined(sens.d_x0[at])
-            ev.b[part] = _flat_where_undefined(sens.d_coef[at][..., sup] * scale)
-        if not np.all(np.isfinite(ev.ends)):
-            return gauss_newton.Evaluation(np.inf)
-        if ridge and q:
-            ev.cost += ridge * float(theta @ theta)
-            ev.h_pp += ridge * np.eye(q)
-            ev.g_p += ridge * theta
-        return ev
+    def solve(self, support, coef, x0s, rows, ridge, *, max_evaluations: int = 200):
+        """Least squares from ``coef`` ``(n, p)`` and ``x0s``; returns ``(coef, x0s, cost)``.
+        ``max_evaluations`` bounds the simulations (supports on the path that fit badly
+        need not converge far to be seen to be bad)."""
+        index = np.flatnonzero(support.ravel())
+        lower = np.concatenate([np.full(len(index), -np.inf),
+                                np.tile(self.bounds[0], len(self.records))])
+        upper = np.concatenate([np.full(len(index), np.inf),
+                                np.tile(self.bounds[1], len(self.records))])
+        theta0 = np.clip(np.concatenate([coef.ravel()[index] / self.coef_scale[index],
+                                         x0s.ravel()]), lower, upper)
+        with np.errstate(all="ignore"):
+            result = self._least_squares(support, rows, ridge, theta0, lower, upper,
+                                         max_evaluations)
+        _, flat, x0s = self._parts(result.x, support)
+        return flat.reshape(self.n, self.p), x0s, float(2 * result.cost)
+
+    def _least_squares(self, support, rows, ridge, theta0, lower, upper, max_evaluations):
+        return scipy.optimize.least_squares(
+            lambda th: self.residuals(th, support, rows, ridge, jacobian=False), theta0,
+            jac=lambda th: self.residuals(th, support, rows, ridge)[1], method="trf",
+            bounds=(lower, upper), x_scale="jac", max_nfev=max_evaluations, xtol=1e-9,
+            ftol=1e-9, gtol=1e-9)
 
     def coefficient_covariance(self, support, coef, x0s, rows, blocks: int = COVARIANCE_BLOCKS):
         """Covariance ``(n p, n p)`` of the fitted coefficients (zero off ``support``): the
@@ -221,28 +142,22 @@ class OutputErrorFit:
         errors correlated in time widen it as they should; initial states are profiled.
         ``covariance_blocks`` keeps the number of blocks (the degrees of freedom + 1)."""
         index = np.flatnonzero(support.ravel())
-        q, n, k = len(index), self.n, self.out_map.k
-        width = q + n * len(self.records)
-        check_memory("the output-error Jacobian", n_bytes((sum(r.m for r in self.records),
-                                                           k, n + q)), "Fit fewer samples")
-        bread_inv = np.zeros((width, width))
-        scores = []
-        for i, (record, w) in enumerate(zip(self.records, rows, strict=True)):
-            sens = self.shooting.sensitivities(x0s[i], record.stages, record.h, coef, index)
-            dh = self.out_map.jacobian(sens.states) / self.y_scale[None, :, None]
-            jac = np.zeros((record.m, k, width))
-            jac[:, :, :q] = np.einsum("mkn,mnc->mkc", dh, sens.d_coef) * self.coef_scale[index]
-            jac[:, :, q + i * n:q + (i + 1) * n] = np.einsum("mkn,mnj->mkj", dh, sens.d_x0)
-            r = (self.out_map(sens.states) - record.y) / self.y_scale
-            jac = _flat_where_undefined(jac[w].reshape(-1, width))
-            r = r[w].ravel()
-            bread_inv += jac.T @ jac
-            for part in np.array_split(np.arange(len(r)), min(blocks, len(r))):
-                scores.append(jac[part].T @ r[part])
-        self.covariance_blocks = count = len(scores)
-        bread = np.linalg.pinv(bread_inv)
-        meat = sum(np.outer(s, s) for s in scores) * count / max(count - 1, 1)
-        scaled = (bread @ meat @ bread)[:q, :q]
+        theta = np.concatenate([coef.ravel()[index] / self.coef_scale[index], x0s.ravel()])
+        r, J = self.residuals(theta, support, rows, 0.0)
+        k = self.out_map.k
+        bread = np.linalg.pinv(J.T @ J)
+        meat = np.zeros_like(bread)
+        start, count = 0, 0
+        for w in rows:
+            size = int(w.sum()) * k
+            for part in np.array_split(np.arange(start, start + size), min(blocks, size)):
+                score = J[part].T @ r[part]
+                meat += np.outer(score, score)
+                count += 1
+            start += size
+        self.covariance_blocks = count
+        meat *= count / max(count - 1, 1)       # the usual small-sample correction
+        scaled = (bread @ meat @ bread)[:len(index), :len(index)]
         out = np.zeros((self.n * self.p, self.n * self.p))
         out[np.ix_(index, index)] = scaled * np.outer(self.coef_scale[index],
                                                       self.coef_scale[index])
@@ -258,11 +173,6 @@ class OutputErrorFit:
     def error(self, coef, x0s, rows) -> float:
         """RMS of the scaled output error on the given rows of every record."""
         return float(np.sqrt(self.squared_errors(coef, x0s, rows)[0]))
-
-    def record_errors(self, coef, x0s) -> np.ndarray:
-        """RMS output error of each record ``(records, k)`` in the outputs' units."""
-        return np.array([np.sqrt(np.mean((sim - r.y) ** 2, axis=0)) for sim, r in
-                         zip(self.simulate_outputs(coef, x0s), self.records, strict=True)])
 
     def squared_errors(self, coef, x0s, rows, blocks: int = SCORE_BLOCKS):
         """Mean squared scaled output error on ``rows`` and its standard error, estimated
@@ -281,20 +191,17 @@ class OutputErrorFit:
     def set_coef_scale(self, x0s):
         """Scale of each coefficient: its equation's derivative scale over its column's RMS
         along the simulation of the fixed part (the prior, or the model being refitted), so
-        that scaled sizes compare across terms; and each state's typical size."""
-        theta_rms, dx_rms, x_rms = [], [], []
+        that scaled sizes compare across terms."""
+        theta_rms, dx_rms = [], []
         for x0, r in zip(x0s, self.records, strict=True):
             states = self.shooting.simulate(x0, r.stages, r.h, self.fixed)
             theta_rms.append(np.mean(self.shooting.theta(states, r.u) ** 2, axis=0))
             dx_rms.append(np.mean((np.diff(states, axis=0) / r.h[:, None]) ** 2, axis=0))
-            x_rms.append(np.mean(states ** 2, axis=0))
         theta = np.sqrt(np.mean(theta_rms, axis=0))
         dx = np.sqrt(np.mean(dx_rms, axis=0))
         dx = np.where(dx > 0, dx, max(float(dx.max()), 1.0))
         theta = np.where(theta > 0, theta, 1.0)
         self.coef_scale = (dx[:, None] / theta[None, :]).ravel()
-        x = np.sqrt(np.mean(x_rms, axis=0))
-        self.state_scale = np.where(np.isfinite(x) & (x > 0), x, 1.0)
 
     def compensated(self, coef, dropped, x0s) -> np.ndarray:
         """A start for the support without the ``dropped`` terms: the remaining terms of each
@@ -318,6 +225,91 @@ class OutputErrorFit:
         return np.abs(coef.ravel()) / self.coef_scale
 
 
-def _flat_where_undefined(jacobian):
-    """An infinite slope (``sqrt`` at 0) or an undefined one at a kink counts as flat."""
-    return np.nan_to_num(jacobian, nan=0.0, posinf=0.0, neginf=0.0)
+def records_of(model, y, t, u, substeps, hold):
+    """The records of ``y``, ``t``, ``u`` prepared for simulation, and the number of inputs ``r``.
+    """
+    trajectories = as_trajectories(y, t, u, x_name="y")
+    r = 0 if trajectories[0].u is None else trajectories[0].u.shape[1]
+    return [_Record(tr, r, substeps, check_hold(hold)) for tr in trajectories], r
+
+
+def n_states_of(model, x0) -> int:
+    """Number of states of the model: from ``state_names``, a sympy prior or ``x0``."""
+    if model.state_names is not None:
+        return 1 if isinstance(model.state_names, str) else len(model.state_names)
+    if isinstance(model.prior, (list, tuple)):
+        return len(model.prior)
+    if x0 is not None:
+        return int(np.shape(x0)[-1])
+    raise ParameterError("the number of states is unknown: give state_names, a prior as a "
+                         "list of sympy expressions, or x0")
+
+
+def initial_states(x0, records, out_map, n) -> np.ndarray:
+    """``(records, n)`` initial guesses: given, or measured states from the first sample."""
+    if x0 is None:
+        return np.array([out_map.initial_guess(r.y[0]) for r in records])
+    x0s = np.asarray(x0, dtype=float).reshape(-1, n) if np.size(x0) % n == 0 else None
+    if x0s is None or len(x0s) not in (1, len(records)) or not np.all(np.isfinite(x0s)):
+        raise ShapeError(f"x0 must be {n} finite numbers (one per state), or one such row per "
+                         f"trajectory; got shape {np.shape(x0)}")
+    return np.repeat(x0s, len(records), axis=0) if len(x0s) == 1 else x0s
+
+
+def check_identifiable(fit):
+    """Every state must be able to move a measured output, through the prior or an allowed
+    term (a chain of dependencies in the model's structure); one that cannot is
+    unidentifiable and is refused by name."""
+    influences = fit.shooting.influences(fit.allowed)
+    reached = set(fit.out_map.measured)
+    grew = True
+    while grew:
+        new = {i for j in reached for i in np.flatnonzero(influences[j])} - reached
+        reached |= new
+        grew = bool(new)
+    dead = [name for i, name in enumerate(fit.setup.state_names) if i not in reached]
+    if dead:
+        raise DataError(f"state(s) {dead} cannot influence the measured outputs "
+                        f"{fit.out_map.names} through the prior or any allowed term, so they "
+                        "cannot be estimated (unidentifiable): measure them or a quantity "
+                        "they affect, or leave them out of the model")
+
+
+def warn_if_not_converged(fit, coef, x0s, rows):
+    """The fit's output error; warns when the fitted model's simulation diverges on the data."""
+    err = fit.error(coef, x0s, rows)
+    if not np.isfinite(err):
+        warnings.warn("the fitted model's simulation diverges on the data", stacklevel=4)
+    return err
+
+
+def split_rows(records, holdout) -> tuple[list, list]:
+    """Training rows (the first part of each record) and held-out rows (the rest)."""
+    train, test = [], []
+    for r in records:
+        cut = int(round(r.m * (1 - holdout)))
+        if cut < 2 or r.m - cut < 2:
+            raise DataError(f"a record of {r.m} samples is too short to hold out its last "
+                            f"{holdout:.0%} for choosing terms; give threshold= a number or "
+                            "longer records")
+        w = np.zeros(r.m, bool)
+        w[:cut] = True
+        train.append(w)
+        test.append(~w)
+    return train, test
+
+
+def x0_bounds(bounds, n):
+    """``(lower (n,), upper (n,))`` from ``None`` or a pair of numbers or sequences."""
+    if bounds is None:
+        return np.full(n, -np.inf), np.full(n, np.inf)
+    try:
+        lower, upper = (np.broadcast_to(np.asarray(b, dtype=float), (n,)).copy()
+                        for b in bounds)
+    except (TypeError, ValueError):
+        raise ParameterError(f"x0_bounds must be (lower, upper), each a number or {n} "
+                             f"numbers; got {bounds!r:.80}") from None
+    if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower >= upper):
+        raise ParameterError(f"x0_bounds must have lower < upper for every state; got "
+                             f"{lower} and {upper}")
+    return lower, upper

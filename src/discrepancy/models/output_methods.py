@@ -19,16 +19,8 @@ _COMMON = """
                 initial state is estimated, within ``x0_bounds`` = ``(lower, upper)``
                 (numbers or one per state) when given (e.g. levels that cannot be negative).
             u_hold: the input between samples (``"linear"``, ``"zoh"``, ``"bandlimited"``).
-            substeps: RK4 steps per sample interval, a positive integer (simulate the
-                result with the same ``method="rk4"``, ``substeps`` and ``u_hold``); a
-                value whose stage inputs would not fit in memory is refused.
-            segment_length: samples per multiple-shooting segment (``"auto"``: 128); each
-                segment is simulated from a state of its own and the fit makes them meet.
-            n_jobs: threads that run the segments (``None``: two on records of 20,000
-                samples or more, else one).
-            jit: compile the simulation and its sensitivities to C (``"auto"``: when a C
-                compiler is found and the work saved exceeds the compile time; compiled
-                code is cached on disk, see :mod:`discrepancy.models.compiled`)."""
+            substeps: RK4 steps per sample interval (simulate the result with the same
+                ``method="rk4"``, ``substeps`` and ``u_hold``)."""
 
 
 class OutputErrorMethods:
@@ -37,8 +29,7 @@ class OutputErrorMethods:
     def fit_outputs(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
                     u_hold: str = "linear", substeps: int = 4, max_terms: int | None = None,
                     holdout: float = 0.25, tolerance: float | None = None,
-                    progress: bool | None = None, segment_length: int | str = "auto",
-                    n_jobs: int | None = None, jit: bool | str = "auto"):
+                    progress: bool | None = None):
         """Learn the discrepancy from measured outputs when some states are not measured
         (output error: the simulation of ``f_m + g`` from estimated initial states, with the
         measured input, is fitted to the recorded outputs). Needs CasADi (``[control]``).
@@ -56,15 +47,12 @@ class OutputErrorMethods:
                 terminal.
 
         After the fit, ``x0_`` holds the estimated initial states, ``output_selection_``
-        the scored supports, ``output_error_`` the scaled RMS output error of the fit,
-        ``output_scale_`` the outputs' spread it is scaled by (``(k,)``, their standard
-        deviations) and ``uncertainty_`` the coefficients' uncertainty (a Gauss–Newton
-        sandwich over blocks of samples, as draws:
-        ``model.print(uncertainty=model.uncertainty_)``). Unmeasured initial states are
-        fitted from several starts (see :meth:`estimate_initial_state`). The path ends
-        with no term: when that is chosen the model is the prior alone (``prior_only_``,
-        with a ``PriorOnlyWarning``). ``region_`` is the range of the states along the
-        fitted simulation and of the inputs (``simulate`` warns beyond).
+        the scored supports, ``output_error_`` the scaled RMS output error of the fit and
+        ``uncertainty_`` the coefficients' uncertainty (a Gauss–Newton sandwich over blocks
+        of samples, as draws: ``model.print(uncertainty=model.uncertainty_)``). The path
+        ends with no term: when that is chosen the model is the prior alone
+        (``prior_only_``, with a ``PriorOnlyWarning``). ``region_`` is the range of the
+        states along the fitted simulation and of the inputs (``simulate`` warns beyond).
         """
         keywords_only("fit_outputs", args, "u, outputs and the options")
         from .output_fit import fit_outputs
@@ -77,7 +65,7 @@ class OutputErrorMethods:
         setup, coef, x0s, fit, path, error = fit_outputs(
             self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
             substeps=substeps, max_terms=max_terms, holdout=holdout, tolerance=tolerance,
-            progress=progress, segment_length=segment_length, n_jobs=n_jobs, jit=jit)
+            progress=progress)
         self._set_fit(setup, coef, None, None)
         self._keep_outputs(y, x0s, fit, error)
         self.output_selection_ = path
@@ -85,8 +73,7 @@ class OutputErrorMethods:
         return self
 
     def refine(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
-               u_hold: str = "linear", substeps: int = 4, segment_length: int | str = "auto",
-               n_jobs: int | None = None, jit: bool | str = "auto"):
+               u_hold: str = "linear", substeps: int = 4):
         """Refit the nonzero coefficients of a fitted model (and the initial states) by
         output error on measured outputs, keeping its terms: e.g. after a derivative-based
         fit whose derivatives were noisy or whose velocities were estimated. Sets ``x0_``,
@@ -107,12 +94,11 @@ class OutputErrorMethods:
         before = self.coef_.copy()
         coef, x0s, fit = refit_outputs(self, y, t, u, outputs=outputs, x0=x0,
                                        x0_bounds=x0_bounds, u_hold=u_hold,
-                                       substeps=substeps, coefficients=True,
-                                       segment_length=segment_length, n_jobs=n_jobs, jit=jit)
+                                       substeps=substeps, coefficients=True)
         from ..selection.output_checks import check_refine
 
         kw = dict(outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
-                  substeps=substeps, segment_length=segment_length, n_jobs=n_jobs, jit=jit)
+                  substeps=substeps)
         self.refine_check_ = check_refine(self, before, y, t, u, **kw)
         if self.refine_check_["kept_original"]:   # the refit forecast worse: keep the model
             coef, x0s, fit = refit_outputs(self, y, t, u, coefficients=False, **kw)
@@ -122,17 +108,10 @@ class OutputErrorMethods:
         return self
 
     def estimate_initial_state(self, y, t=None, *args, u=None, outputs=None, x0=None,
-                               x0_bounds=None, u_hold: str = "linear", substeps: int = 4,
-                               segment_length: int | str = "auto", n_jobs: int | None = None,
-                               jit: bool | str = "auto"):
+                               x0_bounds=None, u_hold: str = "linear", substeps: int = 4):
         """The initial state ``(n,)`` (a list for a list of records) that makes the fitted
         model's simulation best match measured outputs (e.g. the first samples of a test
-        record); the model is unchanged. The state is fitted from several starts (``x0``
-        and the model's ``x0_`` when there are, the measured states, the unmeasured ones
-        at either sign of the outputs' size, inverses of an output map, the model's
-        steady state) and the best fit kept; when even that fits the outputs with an RMS
-        error above a quarter of their spread, :class:`~discrepancy.errors.InitialStateWarning`
-        says how poorly.
+        record); the model is unchanged.
 
         Args:{common}
         """
@@ -141,8 +120,7 @@ class OutputErrorMethods:
         from .output_fit import refit_outputs
 
         _, x0s, _ = refit_outputs(self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds,
-                                  u_hold=u_hold, substeps=substeps, coefficients=False,
-                                  segment_length=segment_length, n_jobs=n_jobs, jit=jit)
+                                  u_hold=u_hold, substeps=substeps, coefficients=False)
         return list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
 
     def _fit_prior_outputs(self, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps):
@@ -190,7 +168,6 @@ class OutputErrorMethods:
         self.x0_ = list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
         self.output_error_ = error
         self.output_names_ = list(fit.out_map.names)
-        self.output_scale_ = fit.y_scale.copy()
         covariance = getattr(fit, "covariance", None)   # none when only x0 was fitted
         self.uncertainty_ = None if covariance is None else sandwich_uncertainty(
             self, covariance, fit.covariance_blocks - 1)

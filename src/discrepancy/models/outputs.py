@@ -86,24 +86,6 @@ class OutputMap:
             x0[self.selected] = y0
         return x0
 
-    def states_from(self, y: np.ndarray, near: np.ndarray, iterations: int = 20) -> np.ndarray:
-        """A state ``(n,)`` whose outputs are ``y`` ``(k,)``: ``near`` with its measured
-        states replaced (directly for outputs that are states, else by Gauss–Newton on
-        ``h(x) = y`` from ``near``; where ``h`` is flat, e.g. saturated, ``near`` stays)."""
-        x = np.array(near, dtype=float)
-        if self.selected is not None:
-            x[self.selected] = y
-            return x
-        free = sorted(self.measured)
-        with np.errstate(all="ignore"):
-            for _ in range(iterations):
-                miss = self(x[None])[0] - y
-                if not np.all(np.isfinite(miss)) or np.max(np.abs(miss)) < 1e-12:
-                    break
-                jac = np.nan_to_num(self.jacobian(x[None])[0][:, free])
-                x[free] -= np.linalg.lstsq(jac, miss, rcond=None)[0]
-        return x if np.all(np.isfinite(x)) else np.array(near, dtype=float)
-
     @property
     def measured(self) -> set[int]:
         """Indices of the states that appear in an output."""

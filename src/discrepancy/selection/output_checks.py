@@ -67,10 +67,9 @@ def simulate_quietly(model, x0, record, substeps, u_hold):
 
 
 def check_refine(model, before: np.ndarray, y, t, u, *, outputs, x0, x0_bounds, u_hold,
-                 substeps, **options) -> dict:
+                 substeps) -> dict:
     """Refit ``before`` (the coefficients ``refine`` started from) on the first part of
-    every record and compare held-out forecasts with ``before``'s (``options``: output
-    error's solver options, e.g. ``segment_length``). Returns
+    every record and compare held-out forecasts with ``before``'s. Returns
     ``{"kept_original", "heldout_error_original", "heldout_error_refined"}`` (scaled RMS
     output errors on the held-out parts)."""
     from ..models.output_fit import refit_outputs
@@ -82,8 +81,7 @@ def check_refine(model, before: np.ndarray, y, t, u, *, outputs, x0, x0_bounds, 
                 "heldout_error_refined": None}
     first = _parts(records, cut)
     original = model.with_coefficients(before)
-    kw = dict(outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold, substeps=substeps,
-              **options)
+    kw = dict(outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold, substeps=substeps)
     refit_coef, refit_x0s, _ = refit_outputs(original, *first, coefficients=True, **kw)
     _, original_x0s, _ = refit_outputs(original, *first, coefficients=False, **kw)
     out_map = OutputMap(outputs, model.state_names_)
