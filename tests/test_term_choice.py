@@ -152,3 +152,28 @@ def test_fit_statistics_keeps_the_choice_of_the_fit(damped):
         model.fit_statistics(stats, setup)
     assert model.forecast_selection_ is not None
     assert active(model) == {("x2", "x2")}
+
+
+def test_logs_cut_shorter_than_the_smoothing_window_keep_the_equation_error_choice(helpers):
+    """A control log cut into hold intervals (41 samples each, smoothed by a 41-sample
+    window): forecasts would end inside the smoothing window, so they cannot judge terms;
+    the equation-error choice stands and finds the true input gain and damping."""
+    t = np.arange(8001) * 0.001
+    def drive(tau):
+        return np.array([np.sin(3 * tau) + 0.5 * np.cos(1.3 * tau)])
+
+    def truth(x, u):
+        return np.array([x[1], -x[0] - 0.4 * x[1] + 0.5 * u[0]])
+
+    x = helpers.integrate(truth, [1.0, 0.0], t, u=drive)
+    u = drive(t)[0]
+    cut = [slice(i, i + 41) for i in range(0, len(t) - 41, 64)]
+    model = dc.DiscrepancyModel(
+        prior=lambda x, u=None: np.stack([x[..., 1], -x[..., 0]], axis=-1),
+        feature_library=dc.PolynomialLibrary(2),
+        differentiation_method=dc.SavitzkyGolay(window_length=41, polyorder=3, smooth=False))
+    model.fit([x[c] for c in cut], t=0.001, u=[u[c, None] for c in cut])
+    assert model.forecast_selection_ is None
+    assert active(model) == {("x2", "x2"), ("x2", "u")}
+    names = model.get_feature_names()
+    assert model.coef_[1, names.index("u")] == pytest.approx(0.5, rel=0.02)

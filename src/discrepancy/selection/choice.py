@@ -121,6 +121,8 @@ def select_by_forecasts(setup, stats, optimizer, held_out):
     origins = sensitive_leads(origins, reference)
     reference.lead[np.isnan(origins.truth[:, :, 0])] = np.nan
     steps = choose_steps(reference.lead)
+    if steps * origins.stride <= _halo(setup):
+        return None   # forecasts that end inside the smoothing window test nothing it hides
     full = origins.steps_held() >= steps
     origins = origins.subset(full if full.sum() >= MIN_WINDOWS else everything, steps)
     origins = refine_origins(setup, origins, min(steps, _local_steps(setup, origins)), coef)
@@ -146,6 +148,13 @@ def _reference(setup, origins, optimizer):
     errors = [np.nanmean(np.minimum(run.lead, CAP)) for run in runs]
     k = int(np.argmin(errors))
     return candidates[k], runs[k]
+
+
+def _halo(setup) -> int:
+    """Samples on either side that the differentiation smooths an origin with (0 when it
+    does not say)."""
+    halo = getattr(setup.differentiation, "halo", None)
+    return int(halo) if isinstance(halo, (int, np.integer)) else 0
 
 
 def _local_steps(setup, origins) -> int:
