@@ -24,7 +24,7 @@ def encoder_swing():
 
 
 def energy_error(rod, smoother, q, t, x) -> float:
-    smooth, rate = smoother(q, t)
+    smooth, rate = smoother.smooth_and_differentiate(q, t)
     keep = slice(smoother.edge, len(t) - smoother.edge)
     return float(np.sqrt(np.mean((rod.energy(np.hstack([smooth, rate])[keep])
                                   - rod.energy(x[keep])) ** 2)))
