@@ -13,6 +13,7 @@ pendulums never stick while they swing. Parameters are drawn per ``(links, famil
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -143,9 +144,11 @@ def draw(links: int, family: str, seed: int) -> dict:
             "counts": int(rng.choice([2048, 4096, 5000]))}
 
 
+@functools.lru_cache(maxsize=16)
 def simulate(links: int, family: str, seed: int) -> Recording:
     """The recording ``(links, family, seed)``: simulated, read by encoders, cut where 15 %
-    of the initial energy above rest is left."""
+    of the initial energy above rest is left. Kept for the process (a chain with Stribeck
+    friction takes about a minute of CPU at the tolerances used): treat it as read-only."""
     spec = draw(links, family, seed)
     true, model = chain(spec["masses"], spec["lengths"], spec["laws"], spec["drag"])
     t = np.arange(int(spec["seconds"] * spec["rate"]) + 1) / spec["rate"]
