@@ -15,8 +15,10 @@ $(STAMP): pyproject.toml paper/pyproject.toml constraints.txt
 demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/discrepancy reproduce all --out out/
 
+# Two workers (the machines have 2 cores); a module's tests stay on one worker, so its
+# expensive fixtures (a whole campaign, a simulated recording) are computed once.
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadscope
 
 # The site in docs/_build/html: API pages from the docstrings, the gallery (examples/) run,
 # warnings are errors; then every public name and internal link is checked.
