@@ -170,7 +170,7 @@ def test_output_error_snippet_finds_the_terms_on_the_hidden_velocity(tmp_path, c
     import discrepancy as dc
 
     t, u, x, y = forced_oscillator(1, [0.5, -0.3])
-    t_new, u_new, x_new, y_new = forced_oscillator(7, [-0.4, 0.6], gain=2.0)
+    t_new, u_new, x_new, y_new = forced_oscillator(7, [-0.4, 0.6], gain=1.5)
     namespace = run_snippet(tmp_path, "docs/guide/output-error.md", dc=dc, y=y, dt=0.05, u=u,
                             y_new=y_new, u_new=u_new, t_new=t_new)
     assert "(vel)' = prior - 0.100 vel - 0.500 pos^3" in capsys.readouterr().out
