@@ -38,7 +38,7 @@ api_package = "discrepancy"
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "README-draft.md", "**/sg_execution_times.rst.bak",
+exclude_patterns = ["_build", "**/sg_execution_times.rst.bak",
                     "auto_examples/*.ipynb", "auto_examples/*.py"]
 templates_path = []
 

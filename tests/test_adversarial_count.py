@@ -66,7 +66,9 @@ def test_the_docstring_gives_the_number_of_distinct_rows_per_entry_point():
     assert f"The {counts['isolated']} isolated rows" in " ".join(__doc__.split())
 
 
-def test_the_readme_gives_the_same_count():
-    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text().split())
+def test_the_readme_and_the_errors_page_give_the_same_count():
+    root = Path(__file__).resolve().parents[1]
     total = sum(len(table.CASES) for table in TABLES)
-    assert f"tries {total} distinct bad or edge inputs" in readme
+    for page in (root / "README.md", root / "docs" / "guide" / "errors.md"):
+        text = " ".join(page.read_text().split())
+        assert f"tries {total} distinct bad or edge inputs" in text, page.name

@@ -1,6 +1,5 @@
-"""The documentation's machinery: which pages the API reference must have (docs/_ext), and the
-README draft's quick start run as printed on Van der Pol data with noise."""
-import re
+"""The documentation's machinery: which pages the API reference must have (docs/_ext). The
+README's and the user guide's code blocks run in tests/test_readme.py."""
 import sys
 from pathlib import Path
 
@@ -54,19 +53,3 @@ def test_public_modules_and_names_follow_the_underscore_rule(catalogue):
     resolution = {name for name, _ in
                   catalogue.exported_entries("discrepancy.differentiation.resolution")}
     assert "TOLERANCE" in resolution and "ROWS" not in resolution
-
-
-def test_readme_draft_quick_start_runs_and_finds_the_discrepancy(tmp_path, capsys,
-                                                                  run_quick_start):
-    text = (ROOT / "docs" / "README-draft.md").read_text()
-    code = re.search(r"## Quick start\n\n```python\n(.*?)```", text, re.S).group(1)
-    assert len(code.strip().splitlines()) <= 15
-    namespace = run_quick_start(text)
-    printed = capsys.readouterr().out
-    assert "(x2)' = prior + 0.40" in printed and "(x2)' = prior + (0.40" in printed
-    assert (tmp_path / "model.json").is_file()
-    low, high = namespace["unc"].interval()
-    names = namespace["model"].get_feature_names()
-    for term, truth in (("x2", 0.4), ("x1^2 x2", -0.4)):
-        assert low[1, names.index(term)] <= truth <= high[1, names.index(term)]
-    assert namespace["x_sim"].shape == (2500, 2)

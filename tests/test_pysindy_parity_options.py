@@ -3,7 +3,7 @@ records, sample weights, the traps (t, live coefficients, differentiation calls,
 simulation keywords, constraint order, names) and the solvers and options that were missing
 (ensembles, SR3 per-term weights and trimming, ConstrainedSR3, FiniteDifference options,
 feature_names, integrator_kws, metric_kws, u as one number). Same numbers to 1e-8, or the
-difference the README documents."""
+difference the user guide documents (docs/guide/pysindy.md)."""
 import warnings
 
 import numpy as np

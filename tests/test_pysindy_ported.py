@@ -3,8 +3,9 @@
 Each case runs PySINDy's call on PySINDy's data (its test fixtures: 10 samples of ``x = 2t``,
 12 samples of Lorenz, three Lorenz runs, the logistic map; its docstring examples) and ours
 beside it. A case id starts with ``same`` (the same numbers to 1e-8, the same outcome for a
-refused input) or ``documented`` (our behaviour differs as the README's "Coming from PySINDy"
-section says; the case checks the documented behaviour and that the README says it).
+refused input) or ``documented`` (our behaviour differs as the guide's "Coming from PySINDy"
+page, docs/guide/pysindy.md, says; the case checks the documented behaviour and that the page
+says it).
 ``python -m pytest tests/test_pysindy_ported.py -q --collect-only`` lists the tally.
 """
 import warnings
@@ -25,8 +26,9 @@ from pysindy_helpers import pysindy_defaults, quiet
 
 warnings.filterwarnings("ignore", module="pysindy")
 TOL = dict(rtol=1e-8, atol=1e-8)
-README = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
-SECTION = README[README.index("## Coming from PySINDy"):README.index("## Command line")]
+#: the user guide's page for PySINDy users (docs/guide/pysindy.md, linked from the README)
+SECTION = (Path(__file__).parents[1] / "docs" / "guide" / "pysindy.md").read_text(
+    encoding="utf-8")
 
 
 def lorenz(t, z):
@@ -34,9 +36,9 @@ def lorenz(t, z):
 
 
 def documented(phrase: str) -> None:
-    """The README's PySINDy section states this difference (line breaks aside)."""
+    """The guide's PySINDy page states this difference (line breaks aside)."""
     assert " ".join(phrase.split()) in " ".join(SECTION.split()), \
-        f"README does not document {phrase!r}"
+        f"docs/guide/pysindy.md does not document {phrase!r}"
 
 
 ours = pysindy_defaults
@@ -551,7 +553,7 @@ def test_documented_default_model_on_a_ten_sample_record():
 
 def test_the_readme_maps_every_public_pysindy_name():
     """Every name in ``pysindy.__all__`` and its submodules' public names has a row (or a
-    mention) in the README's "Coming from PySINDy" section."""
+    mention) on the guide's "Coming from PySINDy" page."""
     import importlib
     import inspect
 
@@ -570,7 +572,7 @@ def test_the_readme_maps_every_public_pysindy_name():
               getattr(getattr(ps, n), "__module__", "").startswith("pysindy")}
     missing = sorted(n for n in names if f"`{n}" not in SECTION and f".{n}" not in SECTION
                      and f" {n}`" not in SECTION)
-    assert not missing, f"README's PySINDy section does not mention {missing}"
+    assert not missing, f"docs/guide/pysindy.md does not mention {missing}"
     assert len(names) >= 60
 
 
