@@ -1,4 +1,4 @@
-"""The adversarial suite tries 840 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 844 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -9,7 +9,7 @@
 | energy | 44 |
 | control | 61 |
 | estimation | 49 |
-| model file | 50 |
+| model file | 54 |
 | io.load | 40 |
 | stream | 37 |
 | dask | 11 |
@@ -22,10 +22,10 @@
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 840 |
+| total | 844 |
 
-699 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 141 must give the right answer, checked against an
+702 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 142 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 48 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly

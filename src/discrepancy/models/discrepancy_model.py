@@ -27,6 +27,7 @@ from ..symbolic import compile_numpy, feature_name
 from .arguments import keywords_only, require_t
 from .checks import checked_discrepancy, pairs
 from .conditioning import warn_if_ill_conditioned
+from .model_parameters import FITTED
 from .output_methods import OutputErrorMethods
 from .prediction_error_methods import PredictionErrorMethods
 from .pysindy_interface import PySINDyInterface
@@ -537,18 +538,28 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         ``prior``: the callable prior, when the state says it was one (code is never
         stored); ``functions``: numpy functions of custom terms, by the names it lists.
         """
-        from .model_file import decode
+        from .model_file import _fail, decode
+        from .model_parameters import check_parameters
         fields = decode(state, prior=prior, functions=functions)
+        given = fields["parameters"]   # empty before version 4: the defaults
+        check_parameters(cls, given, _fail)
+        optimizer = fields["optimizer"]
+        if optimizer is None and given.get("optimizer") is not FITTED:
+            optimizer = given.get("optimizer")
         model = cls(prior=fields["prior"], feature_library=fields["library"],
-                    optimizer=fields["optimizer"],
+                    optimizer=optimizer,
                     differentiation_method=fields["differentiation_method"],
-                    state_names=fields["state_names"], input_names=fields["input_names"])
+                    state_names=fields["state_names"], input_names=fields["input_names"],
+                    constraints=given.get("constraints"),
+                    discrete_time=given.get("discrete_time", False),
+                    selection=given.get("selection", "auto"))
         setup = model.make_setup(len(fields["state_names"]), len(fields["input_names"]))
         optimizer = copy.deepcopy(setup.optimizer)
         optimizer.coef_ = fields["coefficients"]
         model._set_fit(setup, fields["coefficients"], optimizer, None)
         model.differentiation_choice_ = fields["differentiation_choice"]
         model.region_, model.forecast_selection_ = fields["region"], None
+        model.set_params(**{k: v for k, v in given.items() if v is not FITTED})
         return model
 
     @classmethod
