@@ -1,4 +1,4 @@
-"""The adversarial suite tries 844 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 849 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -7,7 +7,7 @@
 | optimizer | 77 |
 | differentiation | 43 |
 | energy | 44 |
-| control | 61 |
+| control | 62 |
 | estimation | 49 |
 | model file | 54 |
 | io.load | 40 |
@@ -15,17 +15,17 @@
 | dask | 11 |
 | fit | 79 |
 | prior | 21 |
-| model | 49 |
+| model | 52 |
 | isolated | 48 |
-| predict | 15 |
+| predict | 16 |
 | score | 21 |
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 844 |
+| total | 849 |
 
-702 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 142 must give the right answer, checked against an
+706 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 143 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 48 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly

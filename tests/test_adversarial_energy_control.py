@@ -129,6 +129,7 @@ CASES = [
     Case("energy", "from_system of a system without joints", lambda: dc.DissipationDiscrepancy.from_system(dc.systems.VanDerPol()), raises(ParameterError, r"system must have energy, position_names and joints\(\)")),
     # --- control
     Case("control", "model a number", lambda: as_casadi(3), raises(ParameterError, r"model must be a casadi.Function")),
+    Case("control", "model a discrete-time map", lambda: MPC(dc.DiscrepancyModel.from_prior([0.9 * sp.Symbol("x")], state_names=["x"], discrete_time=True), dt=0.1), raises(ParameterError, r"model is discrete-time")),
     Case("control", "dynamics without inputs", lambda: as_casadi(ca.Function("f", [_x], [_x])), raises(ShapeError, r"dynamics must map \(x \(n,1\), u \(r,1\)\)")),
     Case("control", "unknown cost", lambda: plan(cost="time"), raises(ParameterError, r"cost must be one of \('tracking', 'effort'\); got 'time'")),
     Case("control", "negative horizon", lambda: plan(T=-1), raises(ParameterError, r"plan_trajectory: T must be a finite number > 0; got -1")),

@@ -61,6 +61,10 @@ def boot(**kw):
 CASES = [
     # --- predict and discrepancy
     Case("predict", "before fit", lambda: fast().predict(X), raises(NotFittedError, r"call fit\(x, t\) first")),
+    Case("predict", "predict_ahead of a map iterates it", lambda: MAP.predict_ahead(0.9 ** np.arange(6.0)[:, None], steps=2)[:, 0], returns(lambda v: np.allclose(v, 0.9 ** np.arange(2.0, 6.0), rtol=1e-9))),
+    Case("model", "fit_outputs of a map", lambda: fast(discrete_time=True).fit_outputs(X, u=None, outputs=["x1", "x2"]), raises(ParameterError, r"fit_outputs simulates continuous-time models.*discrete_time=True")),
+    Case("model", "refine of a map", lambda: MAP.refine(0.9 ** np.arange(50.0), outputs=["x1"]), raises(ParameterError, r"refine simulates continuous-time models.*discrete_time=True")),
+    Case("model", "estimate_initial_state of a map", lambda: MAP.estimate_initial_state(0.9 ** np.arange(50.0), outputs=["x1"]), raises(ParameterError, r"estimate_initial_state simulates continuous-time models")),
     Case("predict", "x with 3 columns", lambda: ROT.predict(np.zeros((5, 3))), raises(ShapeError, r"^x must have 2 columns")),
     Case("predict", "x with NaN", lambda: ROT.predict(np.full((5, 2), np.nan)), raises(DataError, r"^x must be finite")),
     Case("predict", "complex x", lambda: ROT.predict(X + 1j), raises(DataError, r"^x must be real")),

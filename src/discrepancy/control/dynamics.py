@@ -34,6 +34,9 @@ def as_casadi(model) -> ca.Function:
     if isinstance(model, ca.Function):
         f = model
     elif hasattr(model, "to_casadi"):
+        if getattr(model, "discrete_time", False) is True:
+            raise ParameterError("model is discrete-time (a map x[k+1] = f(x[k], u[k])); "
+                                 "control takes continuous-time dynamics f(x, u) -> xdot")
         f = model.to_casadi()  # ExportError naming the term if a term has no symbolic form
     elif isinstance(model, (tuple, list)) and len(model) == 3:
         f = from_equations(*model)

@@ -364,14 +364,21 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
                       u_hold: str = "linear", substeps: int = 4) -> np.ndarray:
         """``steps``-ahead predictions from measured states ``x`` ``(m, n)`` at ``t``:
         ``(m - steps, n)``, row ``i`` predicting ``x[i + steps]`` from ``x[i]`` (RK4 with
-        ``substeps`` per sample, the input held by ``u_hold``). Compare with ``x[steps:]``."""
+        ``substeps`` per sample, the input held by ``u_hold``). Compare with ``x[steps:]``.
+        A discrete-time model iterates its map ``steps`` times from each ``x[i]`` with
+        ``u[i], ..., u[i + steps - 1]`` (``t``, ``u_hold`` and ``substeps`` are not used)."""
         keywords_only("predict_ahead", args, "u and the options")
         self.check_is_fitted()
         self._sync()
-        from .prediction import checked_states, predict_ahead
+        from .prediction import checked_states, iterate_ahead, predict_ahead
 
-        require_t("predict_ahead", t, needed=True)
         x = checked_states(self, x, u)
+        if self.discrete_time:
+            ahead = iterate_ahead(self._rhs_one, x, u, n_inputs=self.n_inputs_, steps=steps)
+            guard_run(self, ahead, None if u is None else np.asarray(u)[:len(ahead)],
+                      "predict_ahead")
+            return ahead
+        require_t("predict_ahead", t, needed=True)
         ahead = predict_ahead(self._rhs_one, x, t, u,
                               n_inputs=self.n_inputs_, steps=steps, u_hold=u_hold,
                               substeps=substeps)
@@ -516,7 +523,8 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         return to_latex(self, precision, part)
 
     def to_casadi(self, part: str | None = None):
-        """CasADi ``Function`` ``f(x, u) -> xdot`` (``f(x)`` without inputs), exact.
+        """CasADi ``Function`` ``f(x, u) -> xdot`` (``f(x)`` without inputs), exact; for a
+        discrete-time model the map ``f(x, u) -> x_next``.
 
         The default is the whole hybrid model, which needs a sympy prior: a callable
         prior raises ExportError (ask for ``part="discrepancy"`` to get ``g`` alone).

@@ -61,7 +61,8 @@ def to_latex(model, precision: int = 4, part=None) -> str:
 
 
 def to_casadi(model, part=None):
-    """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms)."""
+    """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms);
+    a discrete-time model's output is named ``x_next`` (the map, not a rate)."""
     from .._optional import require
 
     ca = require("casadi", purpose="to_casadi")
@@ -83,9 +84,10 @@ def to_casadi(model, part=None):
                                                  term=f"prior[{i}]")
         rows.append(total)
     xdot = ca.vertcat(*[ca.SX(r) if not isinstance(r, ca.SX) else r for r in rows])
+    out = "x_next" if model.discrete_time else "xdot"
     if model.n_inputs_ == 0:
-        return ca.Function("f", [x], [xdot], ["x"], ["xdot"])
-    return ca.Function("f", [x, u], [xdot], ["x", "u"], ["xdot"])
+        return ca.Function("f", [x], [xdot], ["x"], [out])
+    return ca.Function("f", [x, u], [xdot], ["x", "u"], [out])
 
 
 def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
