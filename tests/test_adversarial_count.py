@@ -1,4 +1,4 @@
-"""The adversarial suite tries 854 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 857 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -15,17 +15,17 @@
 | dask | 11 |
 | fit | 79 |
 | prior | 21 |
-| model | 52 |
+| model | 54 |
 | isolated | 50 |
-| predict | 16 |
+| predict | 17 |
 | score | 21 |
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 854 |
+| total | 857 |
 
 709 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 145 must give the right answer, checked against an
+matches a pattern naming the argument; 148 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 50 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly

@@ -2,6 +2,8 @@
 bootstrap (see ``adversarial.py`` for the machinery)."""
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import sympy as sp
 
@@ -20,6 +22,16 @@ from discrepancy.errors import (
     SimulationError,
 )
 from discrepancy.symbolic import symbol
+
+def sklearn_not_fitted(call) -> bool:
+    """Whether ``call`` raises an error that is ours and scikit-learn's NotFittedError."""
+    import sklearn.exceptions
+    try:
+        call()
+    except sklearn.exceptions.NotFittedError as e:
+        return isinstance(e, NotFittedError)
+    return False
+
 
 T, X, XD = circle(400)
 X1, X2 = symbol("x1"), symbol("x2")
@@ -61,6 +73,9 @@ def boot(**kw):
 CASES = [
     # --- predict and discrepancy
     Case("predict", "before fit", lambda: fast().predict(X), raises(NotFittedError, r"call fit\(x, t\) first")),
+    Case("predict", "before fit, caught as scikit-learn's NotFittedError", lambda: sklearn_not_fitted(lambda: fast().predict(X)), returns(lambda v: v is True)),
+    Case("model", "a fitted model through pickle", lambda: pickle.loads(pickle.dumps(SYM)).predict(X), returns(lambda v: np.allclose(v, XD, atol=1e-9))),
+    Case("model", "a model with numpy function terms through pickle", lambda: pickle.loads(pickle.dumps(FUNC)).predict(S), returns(lambda v: np.allclose(v, S ** 2, atol=1e-9))),
     Case("predict", "predict_ahead of a map iterates it", lambda: MAP.predict_ahead(0.9 ** np.arange(6.0)[:, None], steps=2)[:, 0], returns(lambda v: np.allclose(v, 0.9 ** np.arange(2.0, 6.0), rtol=1e-9))),
     Case("model", "fit_outputs of a map", lambda: fast(discrete_time=True).fit_outputs(X, u=None, outputs=["x1", "x2"]), raises(ParameterError, r"fit_outputs simulates continuous-time models.*discrete_time=True")),
     Case("model", "refine of a map", lambda: MAP.refine(0.9 ** np.arange(50.0), outputs=["x1"]), raises(ParameterError, r"refine simulates continuous-time models.*discrete_time=True")),
