@@ -23,6 +23,7 @@ from discrepancy.errors import (
 )
 from discrepancy.symbolic import symbol
 
+
 def sklearn_not_fitted(call) -> bool:
     """Whether ``call`` raises an error that is ours and scikit-learn's NotFittedError."""
     import sklearn.exceptions
