@@ -1,4 +1,4 @@
-"""The adversarial suite tries 857 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 868 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -6,8 +6,8 @@
 | library | 54 |
 | optimizer | 77 |
 | differentiation | 43 |
-| energy | 45 |
-| control | 62 |
+| energy | 49 |
+| control | 69 |
 | estimation | 51 |
 | model file | 54 |
 | io.load | 40 |
@@ -22,10 +22,10 @@
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 857 |
+| total | 868 |
 
-709 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 148 must give the right answer, checked against an
+718 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 150 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 50 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
