@@ -1,4 +1,4 @@
-"""The adversarial suite tries 868 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 869 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -16,17 +16,17 @@
 | fit | 79 |
 | prior | 21 |
 | model | 54 |
-| isolated | 50 |
+| isolated | 51 |
 | predict | 17 |
 | score | 21 |
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 868 |
+| total | 869 |
 
 718 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 150 must give the right answer, checked against an
-exact value (closed forms, numpy least squares, the in-memory fit). The 50 isolated rows
+matches a pattern naming the argument; 151 must give the right answer, checked against an
+exact value (closed forms, numpy least squares, the in-memory fit). The 51 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
 these numbers of distinct rows, so the figures cannot drift from the suite.

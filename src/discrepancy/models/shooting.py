@@ -151,16 +151,17 @@ class ShootingModel:
     def _run(self, parameters, x0, stages, h, coef) -> np.ndarray:
         """Carried values at every sample ``(len(h) + 1, width)`` from ``x0``."""
         k, c = len(h), np.ascontiguousarray(coef, dtype=float).ravel()
-        cols, lengths = self.columns(stages, h, BLOCK)
-        key = (None if parameters is None else tuple(parameters), BLOCK, 0)
+        length = block_length(k, self.substeps)
+        cols, lengths = self.columns(stages, h, length)
+        key = (None if parameters is None else tuple(parameters), length, 0)
         if key not in self._maps:
-            self._maps[key] = _Call(self.block(parameters, BLOCK))
+            self._maps[key] = _Call(self.block(parameters, length))
         call = self._maps[key]
         out = np.empty((len(lengths) + 1, self.width(parameters)))
         out[0] = self._start(x0, parameters)
-        for i in range(0, len(lengths), BLOCK):
-            call(out[i + 1:i + 1 + BLOCK], out[i].copy(), cols[i:i + BLOCK],
-                 lengths[i:i + BLOCK], c)
+        for i in range(0, len(lengths), length):
+            call(out[i + 1:i + 1 + length], out[i].copy(), cols[i:i + length],
+                 lengths[i:i + length], c)
         return out[:k + 1]
 
     def columns(self, stages, h, length: int):
@@ -250,6 +251,15 @@ class ShootingModel:
         """Library columns ``(m, p)`` along a trajectory (for scaling the coefficients)."""
         u = np.zeros((len(states), 0)) if inputs is None else inputs
         return np.asarray(self.library_function.map(len(states))(states.T, u.T)).T
+
+
+def block_length(k: int, substeps: int) -> int:
+    """Steps per call for a run of ``k`` steps: a power of two, at least ``k`` when that is
+    at most :data:`BLOCK` and ``4 BLOCK / substeps`` (the padding of the last call is work
+    too: 3 samples with 10,000 substeps once ran 256 padded steps per call)."""
+    need = 1 << max(0, (k - 1).bit_length())
+    cap = 1 << (min(BLOCK, max(1, 4 * BLOCK // substeps)).bit_length() - 1)
+    return max(1, min(need, cap))
 
 
 class _Call:
