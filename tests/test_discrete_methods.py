@@ -101,6 +101,11 @@ def test_export_is_the_map(fitted):
         < 1e-10
 
 
+def test_latex_of_a_map_has_next_states_not_rates(fitted):
+    latex = fitted.to_latex(precision=3)
+    assert "x_{1}[k+1] &=" in latex and r"\dot" not in latex
+
+
 def test_control_refuses_a_map_by_name(fitted):
     pytest.importorskip("casadi")
     from discrepancy.control import MPC

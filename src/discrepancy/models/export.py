@@ -43,7 +43,8 @@ def to_sympy(model, part=None) -> list[sp.Expr]:
 
 
 def to_latex(model, precision: int = 4, part=None) -> str:
-    """The model's equations as LaTeX (see :meth:`~discrepancy.DiscrepancyModel.to_latex`)."""
+    """The model's equations as LaTeX (see :meth:`~discrepancy.DiscrepancyModel.to_latex`);
+    a map's left-hand sides are ``x[k+1]``, an ODE's ``\\dot{x}``."""
     from ..constraints import Integral, Interval, validate_params
 
     validate_params("to_latex", {"precision": precision},
@@ -52,7 +53,8 @@ def to_latex(model, precision: int = 4, part=None) -> str:
     lines = []
     for name, e in zip(model.state_names_, exprs, strict=True):
         rounded = e.xreplace({f: sp.Float(f, precision) for f in e.atoms(sp.Float)})
-        lhs = r"\dot{" + sp.latex(symbol(name)) + "}"
+        lhs = sp.latex(symbol(name)) + "[k+1]" if model.discrete_time else \
+            r"\dot{" + sp.latex(symbol(name)) + "}"
         rhs = sp.latex(rounded) if e != 0 else "0"
         if part == "discrepancy" or (model.prior is not None and not model.prior_.is_symbolic):
             lhs = r"\delta " + lhs
