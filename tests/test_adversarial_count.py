@@ -1,8 +1,8 @@
-"""The adversarial suite tries 869 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 870 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
-| cli | 45 |
+| cli | 46 |
 | library | 54 |
 | optimizer | 77 |
 | differentiation | 43 |
@@ -22,10 +22,10 @@
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 869 |
+| total | 870 |
 
 718 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 151 must give the right answer, checked against an
+matches a pattern naming the argument; 152 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 51 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
