@@ -1,4 +1,4 @@
-"""The adversarial suite tries 870 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 872 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -7,7 +7,7 @@
 | optimizer | 77 |
 | differentiation | 43 |
 | energy | 49 |
-| control | 69 |
+| control | 71 |
 | estimation | 51 |
 | model file | 54 |
 | io.load | 40 |
@@ -22,10 +22,10 @@
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 870 |
+| total | 872 |
 
-718 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 152 must give the right answer, checked against an
+719 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 153 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 51 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly

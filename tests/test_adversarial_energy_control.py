@@ -17,6 +17,7 @@ from discrepancy.control import (
     plan_trajectory,
     replay,
     rk4_step,
+    stationary_lqr,
     swing_up_errors,
     tvlqr,
 )
@@ -166,6 +167,8 @@ CASES = [
     Case("control", "MPC max_iter True", lambda: MPC(DOUBLE, dt=0.1, solver="rti", max_iter=True), raises(ParameterError, r"MPC: max_iter must be None or an integer >= 1 .*; got True")),
     Case("control", "MPC compile a word", lambda: MPC(DOUBLE, dt=0.1, solver="rti", compile="yes"), raises(ParameterError, r"compile must be True or False; got 'yes'")),
     Case("control", "MPC soft_penalty 0", lambda: MPC(DOUBLE, dt=0.1, solver="rti", soft_penalty=0.0), raises(ParameterError, r"MPC: soft_penalty must be a finite number > 0; got 0.0")),
+    Case("control", "stationary_lqr with diagonal weights as a list", lambda: stationary_lqr(DOUBLE, [0, 0], [0], dt=0.1, substeps=np.int64(2), Q=[1, 1], R=1)[0].shape, returns(lambda v: v == (1, 2))),
+    Case("control", "stationary_lqr with a negative weight", lambda: stationary_lqr(DOUBLE, [0, 0], [0], dt=0.1, substeps=2, Q=[-1, 1], R=1), raises(ParameterError, r"Q must be positive semidefinite weights \(>= 0\); diagonal entries \[0\] are negative")),
     Case("control", "MPC negative state weights", lambda: MPC(DOUBLE, dt=0.1, Q=[-1, -1]), raises(ParameterError, r"Q must be positive semidefinite weights \(>= 0\); diagonal entries \[0, 1\] are negative")),
     Case("control", "MPC indefinite state weights", lambda: MPC(DOUBLE, dt=0.1, Q=[[1, 2], [2, 1]]), raises(ParameterError, r"Q must be positive semidefinite .*smallest eigenvalue is -1")),
     Case("control", "MPC negative soft_penalty", lambda: MPC(DOUBLE, dt=0.1, soft_penalty=-5.0), raises(ParameterError, r"MPC: soft_penalty must be a finite number > 0; got -5")),

@@ -135,3 +135,19 @@ def test_numpy_integers_are_integers():
     run = closed_loop(double_integrator(), lambda k, x: np.array([-x[0]]), x0, dt=0.1,
                       steps=np.int64(3))
     assert len(run.t) == 4
+
+
+def test_stationary_lqr_takes_diagonal_weights_and_refuses_negative_ones():
+    """Q as a list of diagonal entries gives scipy's LQR of the exact held-input step (it
+    silently returned (None, None) before); a negative weight is refused by name."""
+    from discrepancy.control import stationary_lqr
+
+    dt = 0.1
+    A, B = np.array([[1, dt], [0, 1]]), np.array([[dt ** 2 / 2], [dt]])
+    P = solve_discrete_are(A, B, np.diag([2.0, 0.5]), np.array([[0.3]]))
+    K, P_lqr = stationary_lqr(double_integrator(), [0, 0], [0], dt=dt, substeps=np.int64(2),
+                              Q=[2.0, 0.5], R=0.3)
+    np.testing.assert_allclose(P_lqr, P, rtol=1e-9)
+    np.testing.assert_allclose(K, np.linalg.solve(0.3 + B.T @ P @ B, B.T @ P @ A), rtol=1e-9)
+    with pytest.raises(ParameterError, match="Q must be positive semidefinite"):
+        stationary_lqr(double_integrator(), [0, 0], [0], dt=dt, substeps=2, Q=[-1, 1], R=1)

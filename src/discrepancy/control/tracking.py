@@ -103,8 +103,10 @@ def linearise(model, plan: Plan):
 def stationary_lqr(model, x_eq, u_eq, *, dt: float, substeps: int, Q, R):
     """``(K (r, n), P (n, n))``: infinite-horizon discrete LQR about ``(x_eq, u_eq)`` for the
     held-input step of ``model``; ``(None, None)`` if the Riccati equation has no
-    stabilising solution there (e.g. not an equilibrium one can stabilise)."""
+    stabilising solution there (e.g. not an equilibrium one can stabilise). ``Q``, ``R``:
+    weights as :class:`~.mpc.MPC` takes them (numbers, diagonals or matrices, >= 0)."""
     A, B = (np.array(m) for m in step_jacobians(model, dt, substeps)(x_eq, u_eq))
+    Q, R = _diag("Q", Q, A.shape[0]), _diag("R", R, B.shape[1])
     try:
         P = solve_discrete_are(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError):
