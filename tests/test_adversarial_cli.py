@@ -35,6 +35,8 @@ dc.DiscrepancyModel(differentiation_method="finite_difference").fit(X, 0.01).sav
 dc.DiscrepancyModel(prior=lambda x, u: x, differentiation_method="finite_difference").fit(
     X, 0.01).save(DIR / "callable.json")
 MODEL = str(DIR / "plain.json")
+dc.DiscrepancyModel.from_prior([0.9 * dc.symbolic.symbol("x")], state_names=["x"],
+                               discrete_time=True).save(DIR / "map.json")
 
 
 @dataclass(frozen=True)
@@ -106,6 +108,7 @@ CASES = [
     Case("cli", "simulate: t words", lambda: cli("simulate", "--model", MODEL, "--x0", "1,2", "--t", "a,b"), fails(2, r"--t must be comma-separated numbers")),
     Case("cli", "simulate: t one time", lambda: cli("simulate", "--model", MODEL, "--x0", "1,2", "--t", "0"), fails(1, r"t must be a 1-D array of at least 2 output times")),
     Case("cli", "simulate: callable prior not given", lambda: cli("simulate", "--model", DIR / "callable.json", "--x0", "1,2", "--t", "0:1:0.1"), fails(2, r"--prior is required")),
+    Case("cli", "simulate: a saved map iterates it", lambda: cli("simulate", "--model", str(DIR / "map.json"), "--x0=1", "--t", "0:2:1"), returns(lambda r: r.code == 0 and [float(v.split(",")[1]) for v in r.out.splitlines()[1:]] == [1.0, 0.9, 0.81])),
     Case("cli", "simulate: works", lambda: cli("simulate", "--model", MODEL, "--x0=0,1", "--t", "0:1:0.5"), returns(lambda r: r.code == 0 and r.out.splitlines()[0] == "t,x1,x2" and len(r.out.splitlines()) == 4)),
     Case("cli", "show: precision -1", lambda: cli("show", MODEL, "--precision", "-1"), fails(2, r"precision must be an integer >= 0")),
     Case("cli", "show: missing model", lambda: cli("show", out("none.json")), fails(1, r"does not exist")),

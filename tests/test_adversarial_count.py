@@ -1,32 +1,32 @@
-"""The adversarial suite tries 840 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 874 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
-| cli | 45 |
+| cli | 46 |
 | library | 54 |
 | optimizer | 77 |
 | differentiation | 43 |
-| energy | 44 |
-| control | 61 |
-| estimation | 49 |
-| model file | 50 |
+| energy | 49 |
+| control | 71 |
+| estimation | 51 |
+| model file | 54 |
 | io.load | 40 |
 | stream | 37 |
 | dask | 11 |
 | fit | 79 |
 | prior | 21 |
-| model | 49 |
-| isolated | 48 |
-| predict | 15 |
+| model | 56 |
+| isolated | 51 |
+| predict | 17 |
 | score | 21 |
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 840 |
+| total | 874 |
 
-699 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 141 must give the right answer, checked against an
-exact value (closed forms, numpy least squares, the in-memory fit). The 48 isolated rows
+722 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 152 must give the right answer, checked against an
+exact value (closed forms, numpy least squares, the in-memory fit). The 51 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
 these numbers of distinct rows, so the figures cannot drift from the suite.

@@ -62,6 +62,8 @@ def pem(y=Y, **kw):
 CASES = [
     # --- constructing a filter
     Case("estimation", "process noise of 3 values for 2 states", lambda: ekf(process_noise=[1, 1, 1]), raises(ShapeError, r"^process_noise must be a number, 2 standard deviations \(2,\) or a covariance \(2, 2\) \(per second\)")),
+    Case("estimation", "fit_prediction_error with substeps=0", lambda: pem(substeps=0), raises(ParameterError, r"^substeps must be an integer in \[1, 1000\].*got 0")),
+    Case("estimation", "fit_prediction_error with 10**6 substeps", lambda: pem(substeps=10**6), raises(ParameterError, r"^substeps must be an integer in \[1, 1000\]")),
     Case("estimation", "a negative process noise", lambda: ekf(process_noise=[0, -1]), raises(DataError, r"^process_noise must be non-negative standard deviations")),
     Case("estimation", "an asymmetric process covariance", lambda: ekf(process_noise=[[1, 0.5], [0, 1]]), raises(DataError, r"^process_noise must be a symmetric covariance")),
     Case("estimation", "an indefinite process covariance", lambda: ekf(process_noise=[[1, 2], [2, 1]]), raises(DataError, r"^process_noise must be positive semidefinite; its smallest eigenvalue is -1")),

@@ -114,6 +114,18 @@ def same_model(m) -> bool:
     return np.allclose(m.coef_, ROTATION, atol=1e-9)
 
 
+MAP = dc.DiscrepancyModel.from_prior([0.9 * symbol("x")], state_names=["x"], discrete_time=True)
+MAP_FILE = DIR / "map.json"
+MAP.save(MAP_FILE)
+
+
+def edited_parameters(**edits):
+    """The rotation model's file with ``parameters`` fields replaced, loaded."""
+    doc = copy.deepcopy(DOC)
+    doc["parameters"].update(edits)
+    return dc.DiscrepancyModel.from_state(doc)
+
+
 GOOD_CSV = "t,x1,x2\n" + "\n".join(f"{a},{b},{c}" for a, b, c in zip(T, X[:, 0], X[:, 1], strict=True))
 FOLDER = DIR / "folder.csv"
 FOLDER.mkdir()
@@ -169,6 +181,10 @@ CASES = [
     Case("model file", "user function that raises", lambda: dc.load_model(FUNC_FILE, functions={"sq": lambda v: 1 / 0}).predict(X), raises(FeatureError, r"user function 'sq' raised ZeroDivisionError")),
     Case("model file", "user function not callable", lambda: dc.load_model(FUNC_FILE, functions={"sq": 3}), raises(ParameterError, r"functions must be None or a non-empty mapping of identifier names to callables")),
     Case("model file", "round trip", lambda: load_doc().predict(X), returns(lambda v: np.allclose(v, XD, atol=1e-9))),
+    Case("model file", "a saved map stays a map", lambda: dc.load_model(MAP_FILE).simulate([1.0], 3).ravel(), returns(lambda v: np.allclose(v, [1.0, 0.9, 0.81], rtol=1e-15))),
+    Case("model file", "discrete_time edited to text", lambda: edited_parameters(discrete_time="yes"), raises(ModelFileError, r"parameters.discrete_time must be a bool")),
+    Case("model file", "constraints edited to a string", lambda: edited_parameters(constraints="x1"), raises(ModelFileError, r"parameters.constraints must be null or an object")),
+    Case("model file", "state_names edited to code", lambda: edited_parameters(state_names=["os.system('x')", "x2"]), raises(ModelFileError, r"state_names must be identifiers")),
     Case("model file", "from_state of a list", lambda: dc.DiscrepancyModel.from_state([1]), raises(ModelFileError, r"format is list")),
     # --- io.load
     Case("io.load", "missing file", lambda: io.load(DIR / "nothing.csv"), raises(MissingFileError, r"data file '.*nothing.csv' does not exist")),

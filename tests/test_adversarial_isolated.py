@@ -116,6 +116,9 @@ CASES = [
     Case("isolated", "optimizer: SR3 with 10**9 iterations and tol 1e-300", "dc.SR3(max_iter=10**9, tol=1e-300).fit(RNG.normal(size=(200, 5)), RNG.normal(size=200)).coef_.shape", returns(lambda v: v == "(1, 5)")),
     Case("isolated", "cli: fit --library fourier(1000000000)", "np.savetxt('run.csv', np.c_[T, X], delimiter=',', header='t,x1,x2', comments='') or cli('fit', '--data', 'run.csv', '--library', 'fourier(1000000000)')", returns(lambda v: v == "1")),
     Case("isolated", "cli: fit --library poly(99999999999999999999)", "cli('fit', '--data', 'run.csv', '--library', 'poly(99999999999999999999)')", returns(lambda v: v == "1")),
+    Case("isolated", "simulate: compiled RK4 with the largest substeps on 3 samples", "fit(x_dot=XD).simulate(X[0], T[:3], method='rk4', substeps=10000).shape", returns(lambda v: v == "(3, 2)")),
+    Case("isolated", "fit_outputs: the largest substeps on 3 samples", "dc.DiscrepancyModel(prior=[symbol('x2'), -symbol('x1')], feature_library='poly(1)', optimizer=dc.STLSQ(threshold=0.05)).fit_outputs(np.sin(T[:3]), T[:3], outputs=['x1'], substeps=10000)", raises(ParameterError, r"substeps must be an integer in \[1, 100\]")),
+    Case("isolated", "io.load: a CSV of 20,000 columns", "open('wide.csv', 'w').write(','.join(['t'] + names(20000)) + '\\n' + ','.join(['0'] * 20001) + '\\n' + ','.join(['1'] * 20001) + '\\n') and dc.io.load('wide.csv').x.shape", returns(lambda v: v == "(2, 20000)")),
     Case("isolated", "cli: simulate --t 0:1e12:1", "fit(x_dot=XD).save('m.json') or cli('simulate', '--model', 'm.json', '--x0=0,1', '--t', '0:1e12:1')", returns(lambda v: v == "2")),
 ]
 

@@ -2,6 +2,8 @@
 bootstrap (see ``adversarial.py`` for the machinery)."""
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import sympy as sp
 
@@ -20,6 +22,17 @@ from discrepancy.errors import (
     SimulationError,
 )
 from discrepancy.symbolic import symbol
+
+
+def sklearn_not_fitted(call) -> bool:
+    """Whether ``call`` raises an error that is ours and scikit-learn's NotFittedError."""
+    import sklearn.exceptions
+    try:
+        call()
+    except sklearn.exceptions.NotFittedError as e:
+        return isinstance(e, NotFittedError)
+    return False
+
 
 T, X, XD = circle(400)
 X1, X2 = symbol("x1"), symbol("x2")
@@ -61,6 +74,15 @@ def boot(**kw):
 CASES = [
     # --- predict and discrepancy
     Case("predict", "before fit", lambda: fast().predict(X), raises(NotFittedError, r"call fit\(x, t\) first")),
+    Case("predict", "before fit, caught as scikit-learn's NotFittedError", lambda: sklearn_not_fitted(lambda: fast().predict(X)), returns(lambda v: v is True)),
+    Case("model", "a fitted model through pickle", lambda: pickle.loads(pickle.dumps(SYM)).predict(X), returns(lambda v: np.allclose(v, XD, atol=1e-9))),
+    Case("model", "a model with numpy function terms through pickle", lambda: pickle.loads(pickle.dumps(FUNC)).predict(S), returns(lambda v: np.allclose(v, S ** 2, atol=1e-9))),
+    Case("predict", "predict_ahead of a map iterates it", lambda: MAP.predict_ahead(0.9 ** np.arange(6.0)[:, None], steps=2)[:, 0], returns(lambda v: np.allclose(v, 0.9 ** np.arange(2.0, 6.0), rtol=1e-9))),
+    Case("model", "fit_outputs of a map", lambda: fast(discrete_time=True).fit_outputs(X, u=None, outputs=["x1", "x2"]), raises(ParameterError, r"fit_outputs simulates continuous-time models.*discrete_time=True")),
+    Case("model", "fit_outputs with substeps=0", lambda: fast().fit_outputs(X[:, :1], t=0.01, outputs=["x1"], x0=[1.0, 0.0], substeps=0), raises(ParameterError, r"substeps must be an integer in \[1, 100\].*got 0")),
+    Case("model", "estimate_initial_state with substeps=2.5", lambda: ROT.estimate_initial_state(X[:20, :1], t=0.01, outputs=["x1"], substeps=2.5), raises(ParameterError, r"substeps must be an integer in \[1, 100\].*got 2.5")),
+    Case("model", "refine of a map", lambda: MAP.refine(0.9 ** np.arange(50.0), outputs=["x1"]), raises(ParameterError, r"refine simulates continuous-time models.*discrete_time=True")),
+    Case("model", "estimate_initial_state of a map", lambda: MAP.estimate_initial_state(0.9 ** np.arange(50.0), outputs=["x1"]), raises(ParameterError, r"estimate_initial_state simulates continuous-time models")),
     Case("predict", "x with 3 columns", lambda: ROT.predict(np.zeros((5, 3))), raises(ShapeError, r"^x must have 2 columns")),
     Case("predict", "x with NaN", lambda: ROT.predict(np.full((5, 2), np.nan)), raises(DataError, r"^x must be finite")),
     Case("predict", "complex x", lambda: ROT.predict(X + 1j), raises(DataError, r"^x must be real")),

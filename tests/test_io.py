@@ -127,3 +127,54 @@ def test_the_benchmark_files_load_as_they_are(folder, name, columns):
     d = io.load(path, states=columns, time=None)
     truth = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=range(len(columns)))
     np.testing.assert_array_equal(d.x, truth)
+
+
+class _CountingName(str):
+    """A column name that counts its comparisons (to measure the lookup's work)."""
+
+    comparisons = 0
+
+    def __eq__(self, other):
+        type(self).comparisons += 1
+        return str.__eq__(self, other)
+
+    __hash__ = str.__hash__
+
+    def strip(self, *chars):
+        return _CountingName(str.strip(self, *chars))
+
+
+@pytest.mark.parametrize("width", [500, 4000])
+def test_csv_column_lookup_is_linear_in_the_number_of_columns(tmp_path, monkeypatch, width):
+    """Loading a wide CSV compares names O(columns) times, not O(columns^2): with 4000
+    columns a list lookup per column would make ~8 million comparisons."""
+    import csv as csv_module
+    import types
+
+    from discrepancy.data import csv_table
+
+    class reader:  # noqa: N801 (stands in for csv.reader)
+        def __init__(self, fh):
+            self._rows = csv_module.reader(fh)
+
+        def __iter__(self):
+            return self
+
+        def __next__(self):
+            return [_CountingName(cell) for cell in next(self._rows)]
+
+        @property
+        def line_num(self):
+            return self._rows.line_num
+
+    monkeypatch.setattr(csv_table, "csv", types.SimpleNamespace(reader=reader,
+                                                                Error=csv_module.Error))
+    names = [f"c{j}" for j in range(width)]
+    path = tmp_path / "wide.csv"
+    path.write_text(",".join(["t", *names]) + "\n" + ",".join(["0"] * (width + 1)) + "\n"
+                    + ",".join(["1"] * (width + 1)) + "\n")
+    _CountingName.comparisons = 0
+    data = io.load(path, inputs=names[:width // 2])
+    assert data.x.shape == (2, width - width // 2) and data.u.shape == (2, width // 2)
+    np.testing.assert_array_equal(data.t, [0.0, 1.0])
+    assert _CountingName.comparisons <= 4 * width

@@ -242,7 +242,7 @@ def _active_index(doc):
 
 
 TAMPERS = {
-    "wrong version": lambda d: replaced(d, ("version",), 4),
+    "wrong version": lambda d: replaced(d, ("version",), 5),
     "version as text": lambda d: replaced(d, ("version",), "1"),
     "version as true": lambda d: replaced(d, ("version",), True),
     "version as 1.0": lambda d: replaced(d, ("version",), 1.0),

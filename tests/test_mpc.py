@@ -108,3 +108,46 @@ def test_bad_settings_and_a_model_without_symbolic_form_are_named():
     model.fit(x, t=0.01, u=u, x_dot=x_dot)
     with pytest.raises(ExportError, match="abs"):
         MPC(model, dt=0.1)
+
+
+@pytest.mark.parametrize("kw, pattern", [
+    ({"Q": [-1, -1]}, r"Q must be positive semidefinite .*diagonal entries \[0, 1\] are negative"),
+    ({"Q": [[1, 2], [2, 1]]}, r"Q must be positive semidefinite .*smallest eigenvalue is -1"),
+    ({"R": -0.3}, r"R must be positive semidefinite"),
+    ({"Q": [[1, 1], [0, 1]]}, r"Q must be a symmetric matrix"),
+    ({"soft_penalty": -5.0}, r"soft_penalty must be a finite number > 0; got -5"),
+    ({"horizon": 10**9}, r"horizon must be an integer >= 2 and <= 10000"),
+    ({"substeps": 0}, r"substeps must be an integer >= 1"),
+])
+def test_weights_and_sizes_are_checked_by_name(kw, pattern):
+    with pytest.raises(ParameterError, match=pattern):
+        MPC(double_integrator(), dt=0.1, **kw)
+
+
+def test_numpy_integers_are_integers():
+    """np.int64 horizons and substeps give the same controller as Python ints (the LQR
+    check above: same first input), and closed_loop takes np.int64 steps."""
+    x0, xr, ur = np.array([1.0, 0.0]), np.zeros((9, 2)), np.zeros((8, 1))
+    as_int = MPC(double_integrator(), dt=0.1, horizon=8, substeps=2, tol=1e-12)
+    as_numpy = MPC(double_integrator(), dt=0.1, horizon=np.int64(8), substeps=np.int64(2),
+                   max_iter=np.int64(100), tol=1e-12)
+    np.testing.assert_array_equal(as_numpy.solve(x0, xr, ur).u, as_int.solve(x0, xr, ur).u)
+    run = closed_loop(double_integrator(), lambda k, x: np.array([-x[0]]), x0, dt=0.1,
+                      steps=np.int64(3))
+    assert len(run.t) == 4
+
+
+def test_stationary_lqr_takes_diagonal_weights_and_refuses_negative_ones():
+    """Q as a list of diagonal entries gives scipy's LQR of the exact held-input step (it
+    silently returned (None, None) before); a negative weight is refused by name."""
+    from discrepancy.control import stationary_lqr
+
+    dt = 0.1
+    A, B = np.array([[1, dt], [0, 1]]), np.array([[dt ** 2 / 2], [dt]])
+    P = solve_discrete_are(A, B, np.diag([2.0, 0.5]), np.array([[0.3]]))
+    K, P_lqr = stationary_lqr(double_integrator(), [0, 0], [0], dt=dt, substeps=np.int64(2),
+                              Q=[2.0, 0.5], R=0.3)
+    np.testing.assert_allclose(P_lqr, P, rtol=1e-9)
+    np.testing.assert_allclose(K, np.linalg.solve(0.3 + B.T @ P @ B, B.T @ P @ A), rtol=1e-9)
+    with pytest.raises(ParameterError, match="Q must be positive semidefinite"):
+        stationary_lqr(double_integrator(), [0, 0], [0], dt=dt, substeps=2, Q=[-1, 1], R=1)

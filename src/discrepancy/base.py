@@ -105,6 +105,14 @@ class Estimator:
             raise NotFittedError(f"this {type(self).__name__} is not fitted yet; call "
                                  f"{self._fit_hint} first")
 
+    def __sklearn_is_fitted__(self) -> bool:
+        """Whether the object is fitted (scikit-learn's ``check_is_fitted`` asks this)."""
+        try:
+            self.check_is_fitted()
+        except NotFittedError:
+            return False
+        return True
+
     def __sklearn_tags__(self):
         """scikit-learn's estimator tags (its grid searches ask for them); scikit-learn is
         imported only when they are asked for."""

@@ -161,7 +161,8 @@ def cmd_simulate(args) -> None:
     model = DiscrepancyModel.from_state(
         doc, prior=_load_callable(args.prior) if args.prior else None)
     t, u = _simulation_inputs(args, model)
-    options = {"u_hold": args.u_hold, "substeps": args.substeps}
+    # a map iterates once per row of --t (its values label the rows); RK4 options are for ODEs
+    options = {} if model.discrete_time else {"u_hold": args.u_hold, "substeps": args.substeps}
     if args.method:
         options["method"] = args.method
     x = model.simulate(_floats("--x0", args.x0), t, u=u, **options)

@@ -5,6 +5,7 @@ exception a Python user would expect (``ValueError`` for bad values,
 ``RuntimeError`` for solver failures), so ``except ValueError`` keeps working.
 Messages name the argument, what was expected and what was given.
 """
+import sys
 
 
 class DiscrepancyError(Exception):
@@ -28,7 +29,36 @@ class UnknownNameError(ParameterError):
 
 
 class NotFittedError(DiscrepancyError, AttributeError):
-    """A method that needs a fitted model was called before ``fit``."""
+    """A method that needs a fitted model was called before ``fit``.
+
+    When scikit-learn is imported (as it is wherever its ``NotFittedError`` can be caught,
+    e.g. ``sklearn.utils.validation.check_is_fitted``), the error raised is also an instance
+    of ``sklearn.exceptions.NotFittedError``; scikit-learn is never imported for this.
+    """
+
+    def __new__(cls, *args, **kwargs):
+        if cls is NotFittedError:
+            cls = _also_sklearn() or cls
+        return super().__new__(cls, *args, **kwargs)
+
+    def __reduce__(self):
+        return NotFittedError, self.args   # pickles by the public class, whichever was made
+
+
+_COMBINED: dict = {}
+
+
+def _also_sklearn():
+    """NotFittedError that is also scikit-learn's, when scikit-learn is already imported."""
+    sklearn_errors = sys.modules.get("sklearn.exceptions")
+    if sklearn_errors is None:
+        return None
+    if "class" not in _COMBINED:
+        _COMBINED["class"] = type("NotFittedError", (NotFittedError,
+                                                     sklearn_errors.NotFittedError),
+                                  {"__module__": __name__, "__doc__": NotFittedError.__doc__,
+                                   "__qualname__": "NotFittedError"})
+    return _COMBINED["class"]
 
 
 class PriorError(DiscrepancyError, ValueError):

@@ -115,7 +115,21 @@ def compile_numpy(expr: sp.Expr, names: Sequence[str],
 
     if not isinstance(expr, sp.Basic):
         raise ExportError(f"expected a sympy expression, got {type(expr).__name__}")
-    return build(expr)
+    return CompiledExpression(build(expr), expr, list(names), functions)
+
+
+class CompiledExpression:
+    """What :func:`compile_numpy` returns: ``f(Z) -> (m,)``, which pickles (as the
+    expression, names and functions it is compiled again from), so fitted models do."""
+
+    def __init__(self, evaluate: Callable, expr, names: list, functions: dict):
+        self._evaluate, self._source = evaluate, (expr, names, functions or None)
+
+    def __call__(self, Z):
+        return self._evaluate(Z)
+
+    def __reduce__(self):
+        return compile_numpy, self._source
 
 
 def _user_call(name: str, f: Callable, args: list[Callable]) -> Callable:

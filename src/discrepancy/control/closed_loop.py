@@ -89,8 +89,14 @@ def closed_loop(plant, law, x0, *, dt: float, steps: int, limits: Limits | None 
     x0 = np.asarray(x0, dtype=float).ravel()
     n = len(x0)
     measured = _measured(outputs, n)
-    if not (isinstance(steps, int) and steps >= 1):
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
         raise ParameterError(f"steps must be a positive integer; got {steps!r}")
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
+        raise ParameterError(f"samples must be a positive integer; got {samples!r}")
+    steps, samples = int(steps), int(samples)
+    from ..resources import check_memory, n_bytes
+    check_memory(f"the log of {steps} steps x {samples} samples of {n} states",
+                 n_bytes((steps * samples + 1, 3 * n)), "Use fewer steps or samples per step")
     std = np.zeros(n) if noise_std is None else np.broadcast_to(
         np.asarray(noise_std, dtype=float), (n,)).copy()
     if np.any(~np.isfinite(std)) or np.any(std < 0):

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
+
 from .._optional import require
 from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import to_casadi
@@ -34,6 +36,9 @@ def as_casadi(model) -> ca.Function:
     if isinstance(model, ca.Function):
         f = model
     elif hasattr(model, "to_casadi"):
+        if getattr(model, "discrete_time", False) is True:
+            raise ParameterError("model is discrete-time (a map x[k+1] = f(x[k], u[k])); "
+                                 "control takes continuous-time dynamics f(x, u) -> xdot")
         f = model.to_casadi()  # ExportError naming the term if a term has no symbolic form
     elif isinstance(model, (tuple, list)) and len(model) == 3:
         f = from_equations(*model)
@@ -51,8 +56,10 @@ def as_casadi(model) -> ca.Function:
 
 def rk4_step(f: ca.Function, dt: float, substeps: int) -> ca.Function:
     """``F(x, u) -> x(t + dt)``: ``substeps`` classical Runge–Kutta steps with ``u`` held."""
-    if not (isinstance(substeps, int) and substeps >= 1):
-        raise ParameterError(f"substeps must be a positive integer; got {substeps!r}")
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or \
+            not 1 <= substeps <= 1000:
+        raise ParameterError(f"substeps must be an integer in [1, 1000]; got {substeps!r}")
+    substeps = int(substeps)
     n, r = f.size1_in(0), f.size1_in(1)
     x0 = ca.SX.sym("x", n)
     u = ca.SX.sym("u", r)

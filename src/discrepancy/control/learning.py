@@ -109,8 +109,10 @@ def learn_by_attempts(attempt: Callable, updater: DiscrepancyUpdater, *, first,
     Returns:
         the attempts in order; the last succeeded unless ``max_attempts`` ran out.
     """
-    if not (isinstance(max_attempts, int) and max_attempts >= 1):
+    if isinstance(max_attempts, bool) or not isinstance(max_attempts, (int, np.integer)) or \
+            max_attempts < 1:
         raise ParameterError(f"max_attempts must be a positive integer; got {max_attempts!r}")
+    max_attempts = int(max_attempts)
     attempts, model = [], first
     for number in range(1, max_attempts + 1):
         success, log, result = attempt(model)

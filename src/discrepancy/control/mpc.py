@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from ..constraints import Integral, Interval, Options, Real, validate_params
 from ..errors import ParameterError, ShapeError
 from .dynamics import as_casadi, rk4_step
 from .limits import Limits
@@ -41,6 +42,17 @@ from .trajectory import Plan
 
 #: solvers and their default iterations per sample
 SOLVERS = {"ipopt": 100, "rti": 1}
+#: MPC's declared parameter constraints, checked before any CasADi work (numpy integers are
+#: integers; the sizes are bounded so that a typo cannot build a problem without end)
+PARAMETERS = {
+    "horizon": [Interval(Integral, 2, 10_000)],
+    "substeps": [Interval(Integral, 1, 1000)],
+    "soft_penalty": [Interval(Real, 0, None, closed="neither")],
+    "solver": [Options(list(SOLVERS))],
+    "max_iter": [None, Interval(Integral, 1, 100_000)],
+    "tol": [Interval(Real, 0, None, closed="neither")],
+    "compile": [bool],
+}
 
 
 class MPC:
@@ -68,19 +80,16 @@ class MPC:
                  limits: Limits | None = None, substeps: int = 2, soft_penalty: float = 1e4,
                  solver: str = "ipopt", max_iter: int | None = None, tol: float = 1e-6,
                  qp_solver: str = "daqp", compile: bool = False):
+        if not Interval(Real, 0, None, closed="neither").is_satisfied_by(dt):
+            raise ParameterError(f"dt must be a positive time step (s); got {dt!r}")
+        validate_params("MPC", dict(horizon=horizon, substeps=substeps,
+                                    soft_penalty=soft_penalty, solver=solver,
+                                    max_iter=max_iter, tol=tol, compile=compile),
+                        PARAMETERS)
         f = as_casadi(model)
         n, r = f.size1_in(0), f.size1_in(1)
-        if not (isinstance(horizon, int) and horizon >= 2):
-            raise ParameterError(f"horizon must be an integer >= 2 intervals; got {horizon!r}")
-        if not (np.isfinite(dt) and dt > 0):
-            raise ParameterError(f"dt must be a positive time step (s); got {dt!r}")
-        if solver not in SOLVERS:
-            raise ParameterError(f"solver must be one of {list(SOLVERS)}; got {solver!r}")
-        max_iter = SOLVERS[solver] if max_iter is None else max_iter
-        if not (isinstance(max_iter, int) and not isinstance(max_iter, bool) and max_iter >= 1):
-            raise ParameterError(f"max_iter must be a positive integer; got {max_iter!r}")
-        if not (np.isfinite(soft_penalty) and soft_penalty > 0):
-            raise ParameterError(f"soft_penalty must be a positive weight; got {soft_penalty!r}")
+        horizon, substeps = int(horizon), int(substeps)
+        max_iter = SOLVERS[solver] if max_iter is None else int(max_iter)
         self.n, self.r, self.dt, self.horizon = n, r, float(dt), horizon
         self.Q, self.R = _diag("Q", np.ones(n) if Q is None else Q, n), _diag("R", R, r)
         self.limits = Limits() if limits is None else limits

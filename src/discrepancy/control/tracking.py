@@ -15,7 +15,7 @@ import casadi as ca
 import numpy as np
 from scipy.linalg import solve_discrete_are
 
-from ..errors import InfeasibleError, ParameterError, ShapeError
+from ..errors import InfeasibleError, ParameterError, ShapeError, describe
 from .dynamics import as_casadi, rk4_step
 from .trajectory import Plan
 
@@ -52,13 +52,30 @@ class Tracker:
 
 
 def _diag(name, w, size):
-    w = np.atleast_1d(np.asarray(w, dtype=float))
+    """A weight as a ``(size, size)`` matrix: finite, symmetric and positive semidefinite
+    (a negative weight would reward the error it should penalise), checked by name."""
+    try:
+        w = np.atleast_1d(np.asarray(w, dtype=float))
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number, ({size},) diagonal weights or a "
+                             f"({size}, {size}) matrix; got {describe(w)}") from None
     if w.ndim == 1 and w.shape[0] in (1, size):
-        return np.diag(np.broadcast_to(w, (size,)))
-    if w.shape == (size, size):
-        return w
-    raise ShapeError(f"{name} must be a scalar, ({size},) diagonal or ({size}, {size}); got "
-                     f"shape {w.shape}")
+        w = np.diag(np.broadcast_to(w, (size,)))
+    elif w.shape != (size, size):
+        raise ShapeError(f"{name} must be a scalar, ({size},) diagonal or ({size}, {size}); "
+                         f"got shape {w.shape}")
+    if not np.all(np.isfinite(w)):
+        raise ParameterError(f"{name} must be finite weights; got {w.tolist()}")
+    if not np.allclose(w, w.T, rtol=1e-10, atol=0):
+        raise ParameterError(f"{name} must be a symmetric matrix; got {w.tolist()}")
+    lowest = float(np.linalg.eigvalsh(w).min())
+    if lowest < -1e-12 * max(1.0, float(np.abs(w).max())):
+        negative = [i for i in range(size) if w[i, i] < 0]
+        where = f"diagonal entries {negative} are negative" if negative else \
+            f"its smallest eigenvalue is {lowest:.3g}"
+        raise ParameterError(f"{name} must be positive semidefinite weights (>= 0); {where}: "
+                             f"{w.tolist() if size <= 6 else '...'}")
+    return w
 
 
 def step_jacobians(model, dt: float, substeps: int) -> ca.Function:
@@ -86,8 +103,10 @@ def linearise(model, plan: Plan):
 def stationary_lqr(model, x_eq, u_eq, *, dt: float, substeps: int, Q, R):
     """``(K (r, n), P (n, n))``: infinite-horizon discrete LQR about ``(x_eq, u_eq)`` for the
     held-input step of ``model``; ``(None, None)`` if the Riccati equation has no
-    stabilising solution there (e.g. not an equilibrium one can stabilise)."""
+    stabilising solution there (e.g. not an equilibrium one can stabilise). ``Q``, ``R``:
+    weights as :class:`~.mpc.MPC` takes them (numbers, diagonals or matrices, >= 0)."""
     A, B = (np.array(m) for m in step_jacobians(model, dt, substeps)(x_eq, u_eq))
+    Q, R = _diag("Q", Q, A.shape[0]), _diag("R", R, B.shape[1])
     try:
         P = solve_discrete_are(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError):

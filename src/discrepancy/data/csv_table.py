@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import itertools
+from collections import Counter
 from collections.abc import Sequence
 
 import numpy as np
@@ -31,6 +32,8 @@ class CSVTable:
         self._lines = self._checked_lines()
         try:
             self.header = self._read_header()
+            #: column index by name (the lookups stay linear in the number of columns)
+            self.position = {name: i for i, name in enumerate(self.header)}
         except BaseException:
             self._fh.close()
             raise
@@ -64,7 +67,7 @@ class CSVTable:
         if empty:
             raise DataError(f"{self.name}: header column {empty[0] + 1} has no name; every "
                             "column needs one")
-        repeated = sorted({h for h in header if header.count(h) > 1})
+        repeated = sorted(h for h, k in Counter(header).items() if k > 1)
         if repeated:
             raise DataError(f"{self.name}: the header names {repeated} more than once; column "
                             "names must be unique")

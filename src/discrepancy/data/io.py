@@ -87,16 +87,18 @@ def _from_csv(path: Path, states, inputs, time) -> LoadedData:
         header = table.header
         inputs = [inputs] if isinstance(inputs, str) else list(inputs or [])
         states = [states] if isinstance(states, str) else states
-        has_time = time is not None and time in header
+        position = table.position
+        has_time = time is not None and time in position
         if states is None:
-            states = [h for h in header if h not in inputs and not (has_time and h == time)]
+            taken = set(inputs)
+            states = [h for h in header if h not in taken and not (has_time and h == time)]
         states = list(states)
         wanted = [*states, *inputs, *([time] if has_time else [])]
-        missing = [n for n in wanted if n not in header]
+        missing = [n for n in wanted if n not in position]
         if missing:
-            raise UnknownNameError(f"{path.name}: columns {missing} not found; the file has "
-                                   f"{header}")
-        data = table.read([header.index(n) for n in wanted])
+            raise UnknownNameError(f"{path.name}: columns {missing[:20]} not found; the file "
+                                   f"has {header[:50]}{' ...' if len(header) > 50 else ''}")
+        data = table.read([position[n] for n in wanted])
     if len(data) == 0:
         raise DataError(f"{path.name}: a CSV file needs a header row and data rows; it has "
                         "no data rows")

@@ -261,11 +261,10 @@ class CSVFiles(_TableFiles):
 
     def _file_chunks(self, path):
         with CSVTable(path) as table:
-            header = table.header
-            self._missing(path, header)
+            self._missing(path, table.position)
             cols = {k: [n] if isinstance(n, str) else list(n)
                     for k, n in self.names.items() if n is not None}
-            flat = [header.index(c) for names in cols.values() for c in names]
+            flat = [table.position[c] for names in cols.values() for c in names]
             start = 0
             while True:
                 block = table.read(flat, max_rows=self.chunk_size)

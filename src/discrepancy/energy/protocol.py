@@ -152,6 +152,10 @@ def forecast_error(record, model: DissipationDiscrepancy, start: int, stop: int
     return record.t[window], (dh - pred) / scale, error_summary(dh, pred)
 
 
+#: most forecast origins of a blind fit (each is one fit of every candidate)
+MAX_ORIGINS = 100
+
+
 def _origins(t, split, horizon, n_origins) -> list[int]:
     last = t[split] - horizon
     first = t[0] + MIN_FIT_SHARE * (t[split] - t[0])
@@ -211,6 +215,12 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
     t = as_times("t", t, len(q))
     if not isinstance(split, (int, np.integer)) or not 10 <= split < len(q):
         raise ParameterError(f"split must be a sample index in [10, {len(q)}); got {split!r}")
+    if isinstance(n_origins, bool) or not isinstance(n_origins, (int, np.integer)) or \
+            not 2 <= n_origins <= min(MAX_ORIGINS, split // 2):
+        raise ParameterError(f"n_origins must be an integer in [2, "
+                             f"{min(MAX_ORIGINS, split // 2)}] (one fit per origin and "
+                             f"candidate, at most one origin per two training samples); got "
+                             f"{n_origins!r}")
     smoothing = None
     if isinstance(candidates, DissipationDiscrepancy):
         base = candidates
@@ -221,8 +231,6 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
             isinstance(c, DissipationDiscrepancy) for c in candidates.values()):
         raise ParameterError("candidates must be a non-empty mapping of names to "
                              f"DissipationDiscrepancy; got {candidates!r:.80}")
-    if not isinstance(n_origins, (int, np.integer)) or n_origins < 2:
-        raise ParameterError(f"n_origins must be an integer >= 2; got {n_origins!r}")
     if dq is not None:
         dq = as_2d("dq", dq, n_rows=len(q), n_cols=q.shape[1], allow_1d=True)[:split]
     validation = float(t[-1] - t[split])

@@ -56,6 +56,10 @@ def fit_prediction_error(model, y, t, u, *, outputs, disturbances, process_noise
                          tolerance, progress):
     """See :meth:`DiscrepancyModel.fit_prediction_error`; returns ``(setup, fit)``."""
     _check_path_options(max_terms, holdout, tolerance)
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or \
+            not 1 <= substeps <= 1000:
+        raise ParameterError(f"substeps must be an integer in [1, 1000] (RK4 steps per sample "
+                             f"interval); got {substeps!r}")
     if model.discrete_time:
         raise ParameterError("fit_prediction_error fits continuous-time models; for a map, "
                              "fit the successors (fit(x, x_dot=x_next)) and filter with "

@@ -136,6 +136,45 @@ def rk4_step(f, n_states: int, n_inputs: int, substeps: int, *, n_parameters: in
     return ca.Function("step", [x, stages, h, *extra], [z])
 
 
+def rk4_substep(f, n_states: int, n_inputs: int, n_parameters: int):
+    """CasADi Function ``substep(x (n,), U (3 r,), dt, p) -> x_next`` for ``f(x, u, p)``: one
+    classical RK4 step of length ``dt`` with the input at its start, middle and end (``U``
+    column-major: the three values of input 0, then of input 1, ...). The same arithmetic as
+    one substep of :func:`rk4_step`."""
+    ca = _casadi()
+    x, stages, dt = ca.SX.sym("x", n_states), ca.SX.sym("U", 3 * n_inputs), ca.SX.sym("dt")
+    p = ca.SX.sym("p", n_parameters)
+
+    def rhs(z, j):
+        return f(z, ca.vertcat(*[stages[3 * i + j] for i in range(n_inputs)]), p)
+
+    k1 = rhs(x, 0)
+    k2 = rhs(x + dt / 2 * k1, 1)
+    k3 = rhs(x + dt / 2 * k2, 1)
+    k4 = rhs(x + dt * k3, 2)
+    return ca.Function("substep", [x, stages, dt, p], [x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+
+
+def chained_step(substep, n_inputs: int, substeps: int):
+    """``step(z, U (r (2S+1),), h, p) -> z_next``: ``substep`` (any function of ``(z, U3, dt,
+    p)``, e.g. a state with its sensitivities) applied ``S = substeps`` times with
+    ``dt = h / S``, substep ``j`` taking stage values ``2j, 2j+1, 2j+2`` of every input (the
+    layout of :func:`stage_columns`). A loop (CasADi ``mapaccum``), not an unrolled
+    expression, so its size does not grow with ``substeps``."""
+    ca = _casadi()
+    width = 2 * substeps + 1
+    z = ca.MX.sym("z", substep.size1_in(0))
+    stages = ca.MX.sym("U", n_inputs * width)
+    h, p = ca.MX.sym("h"), ca.MX.sym("p", substep.size1_in(3))
+    if n_inputs:
+        table = ca.reshape(stages, width, n_inputs)          # [stage, input]
+        per = ca.horzcat(*[ca.vec(table[2 * j:2 * j + 3, :]) for j in range(substeps)])
+    else:
+        per = ca.MX(0, substeps)
+    out = substep.mapaccum(substeps)(z, per, h / substeps, p)
+    return ca.Function("step", [z, stages, h, p], [out[:, -1]])
+
+
 def stage_columns(stages: np.ndarray) -> np.ndarray:
     """``(k, 2S+1, r)`` stage inputs as the ``(r (2S+1), k)`` matrix :func:`rk4_step` maps over."""
     k = stages.shape[0]

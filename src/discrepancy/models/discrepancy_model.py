@@ -27,6 +27,7 @@ from ..symbolic import compile_numpy, feature_name
 from .arguments import keywords_only, require_t
 from .checks import checked_discrepancy, pairs
 from .conditioning import warn_if_ill_conditioned
+from .model_parameters import FITTED
 from .output_methods import OutputErrorMethods
 from .prediction_error_methods import PredictionErrorMethods
 from .pysindy_interface import PySINDyInterface
@@ -363,14 +364,21 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
                       u_hold: str = "linear", substeps: int = 4) -> np.ndarray:
         """``steps``-ahead predictions from measured states ``x`` ``(m, n)`` at ``t``:
         ``(m - steps, n)``, row ``i`` predicting ``x[i + steps]`` from ``x[i]`` (RK4 with
-        ``substeps`` per sample, the input held by ``u_hold``). Compare with ``x[steps:]``."""
+        ``substeps`` per sample, the input held by ``u_hold``). Compare with ``x[steps:]``.
+        A discrete-time model iterates its map ``steps`` times from each ``x[i]`` with
+        ``u[i], ..., u[i + steps - 1]`` (``t``, ``u_hold`` and ``substeps`` are not used)."""
         keywords_only("predict_ahead", args, "u and the options")
         self.check_is_fitted()
         self._sync()
-        from .prediction import checked_states, predict_ahead
+        from .prediction import checked_states, iterate_ahead, predict_ahead
 
-        require_t("predict_ahead", t, needed=True)
         x = checked_states(self, x, u)
+        if self.discrete_time:
+            ahead = iterate_ahead(self._rhs_one, x, u, n_inputs=self.n_inputs_, steps=steps)
+            guard_run(self, ahead, None if u is None else np.asarray(u)[:len(ahead)],
+                      "predict_ahead")
+            return ahead
+        require_t("predict_ahead", t, needed=True)
         ahead = predict_ahead(self._rhs_one, x, t, u,
                               n_inputs=self.n_inputs_, steps=steps, u_hold=u_hold,
                               substeps=substeps)
@@ -515,7 +523,8 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         return to_latex(self, precision, part)
 
     def to_casadi(self, part: str | None = None):
-        """CasADi ``Function`` ``f(x, u) -> xdot`` (``f(x)`` without inputs), exact.
+        """CasADi ``Function`` ``f(x, u) -> xdot`` (``f(x)`` without inputs), exact; for a
+        discrete-time model the map ``f(x, u) -> x_next``.
 
         The default is the whole hybrid model, which needs a sympy prior: a callable
         prior raises ExportError (ask for ``part="discrepancy"`` to get ``g`` alone).
@@ -537,18 +546,28 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         ``prior``: the callable prior, when the state says it was one (code is never
         stored); ``functions``: numpy functions of custom terms, by the names it lists.
         """
-        from .model_file import decode
+        from .model_file import _fail, decode
+        from .model_parameters import check_parameters
         fields = decode(state, prior=prior, functions=functions)
+        given = fields["parameters"]   # empty before version 4: the defaults
+        check_parameters(cls, given, _fail)
+        optimizer = fields["optimizer"]
+        if optimizer is None and given.get("optimizer") is not FITTED:
+            optimizer = given.get("optimizer")
         model = cls(prior=fields["prior"], feature_library=fields["library"],
-                    optimizer=fields["optimizer"],
+                    optimizer=optimizer,
                     differentiation_method=fields["differentiation_method"],
-                    state_names=fields["state_names"], input_names=fields["input_names"])
+                    state_names=fields["state_names"], input_names=fields["input_names"],
+                    constraints=given.get("constraints"),
+                    discrete_time=given.get("discrete_time", False),
+                    selection=given.get("selection", "auto"))
         setup = model.make_setup(len(fields["state_names"]), len(fields["input_names"]))
         optimizer = copy.deepcopy(setup.optimizer)
         optimizer.coef_ = fields["coefficients"]
         model._set_fit(setup, fields["coefficients"], optimizer, None)
         model.differentiation_choice_ = fields["differentiation_choice"]
         model.region_, model.forecast_selection_ = fields["region"], None
+        model.set_params(**{k: v for k, v in given.items() if v is not FITTED})
         return model
 
     @classmethod

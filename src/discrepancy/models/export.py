@@ -43,7 +43,8 @@ def to_sympy(model, part=None) -> list[sp.Expr]:
 
 
 def to_latex(model, precision: int = 4, part=None) -> str:
-    """The model's equations as LaTeX (see :meth:`~discrepancy.DiscrepancyModel.to_latex`)."""
+    """The model's equations as LaTeX (see :meth:`~discrepancy.DiscrepancyModel.to_latex`);
+    a map's left-hand sides are ``x[k+1]``, an ODE's ``\\dot{x}``."""
     from ..constraints import Integral, Interval, validate_params
 
     validate_params("to_latex", {"precision": precision},
@@ -52,7 +53,8 @@ def to_latex(model, precision: int = 4, part=None) -> str:
     lines = []
     for name, e in zip(model.state_names_, exprs, strict=True):
         rounded = e.xreplace({f: sp.Float(f, precision) for f in e.atoms(sp.Float)})
-        lhs = r"\dot{" + sp.latex(symbol(name)) + "}"
+        lhs = sp.latex(symbol(name)) + "[k+1]" if model.discrete_time else \
+            r"\dot{" + sp.latex(symbol(name)) + "}"
         rhs = sp.latex(rounded) if e != 0 else "0"
         if part == "discrepancy" or (model.prior is not None and not model.prior_.is_symbolic):
             lhs = r"\delta " + lhs
@@ -61,7 +63,8 @@ def to_latex(model, precision: int = 4, part=None) -> str:
 
 
 def to_casadi(model, part=None):
-    """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms)."""
+    """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms);
+    a discrete-time model's output is named ``x_next`` (the map, not a rate)."""
     from .._optional import require
 
     ca = require("casadi", purpose="to_casadi")
@@ -83,9 +86,10 @@ def to_casadi(model, part=None):
                                                  term=f"prior[{i}]")
         rows.append(total)
     xdot = ca.vertcat(*[ca.SX(r) if not isinstance(r, ca.SX) else r for r in rows])
+    out = "x_next" if model.discrete_time else "xdot"
     if model.n_inputs_ == 0:
-        return ca.Function("f", [x], [xdot], ["x"], ["xdot"])
-    return ca.Function("f", [x, u], [xdot], ["x", "u"], ["xdot"])
+        return ca.Function("f", [x], [xdot], ["x"], [out])
+    return ca.Function("f", [x, u], [xdot], ["x", "u"], [out])
 
 
 def equations(model, precision: int = 3, uncertainty=None) -> list[str]:

@@ -15,11 +15,16 @@ import numpy as np
 
 from .._optional import missing
 from ..errors import ExportError
-from .casadi_form import hybrid_function, rk4_step, stage_columns
+from .casadi_form import chained_step, hybrid_function, rk4_step, rk4_substep, stage_columns
 
 #: steps per compiled call (building CasADi's map costs time in proportion to its length,
-#: so one map of this length is built once and called block after block)
+#: so one map of this length is built once and called block after block); with many
+#: substeps fewer, so that a call does at most ``CHUNK * 4`` RK4 steps (the last block is
+#: padded with steps of length 0, which are work too)
 CHUNK = 512
+#: most substeps unrolled into one expression; beyond, the substeps run as a CasADi loop
+#: whose size does not grow with ``substeps`` (unrolling 10,000 took 25 s to build)
+MAX_UNROLLED = 32
 
 
 def compiled_stepper(model, x0, u, substeps: int):
@@ -35,15 +40,16 @@ def compiled_stepper(model, x0, u, substeps: int):
         except ExportError:
             cache[substeps] = None
         else:
-            step = rk4_step(f, model.n_states_, model.n_inputs_, substeps)
-            cache[substeps] = step.mapaccum("simulate", CHUNK)
+            step = _step(f, model.n_states_, model.n_inputs_, substeps)
+            cache[substeps] = step.mapaccum("simulate", _chunk(substeps))
     chunk = cache[substeps]
     if chunk is None:
         return None
+    block = _chunk(substeps)
 
     def run(start, stages, h):
         k = len(h)
-        padded = -(-k // CHUNK) * CHUNK               # steps of length 0 change nothing
+        padded = -(-k // block) * block               # steps of length 0 change nothing
         columns = np.zeros((stages.shape[2] * stages.shape[1] if model.n_inputs_ else 0,
                             padded))
         if model.n_inputs_:
@@ -51,16 +57,35 @@ def compiled_stepper(model, x0, u, substeps: int):
         lengths = np.zeros((1, padded))
         lengths[0, :k] = h
         out, x = np.empty((padded, model.n_states_)), np.asarray(start, dtype=float)
-        for i in range(0, padded, CHUNK):
-            block = np.asarray(chunk(x, columns[:, i:i + CHUNK], lengths[:, i:i + CHUNK]))
-            out[i:i + CHUNK] = block.T
-            x = block[:, -1]
+        for i in range(0, padded, block):
+            done = np.asarray(chunk(x, columns[:, i:i + block], lengths[:, i:i + block]))
+            out[i:i + block] = done.T
+            x = done[:, -1]
             if not np.all(np.isfinite(x)):
-                out[i + CHUNK:] = np.nan
+                out[i + block:] = np.nan
                 break
         return out[:k]
 
     return run
+
+
+def _chunk(substeps: int) -> int:
+    """Steps per compiled call for ``substeps`` RK4 steps per step."""
+    return max(1, min(CHUNK, 4 * CHUNK // substeps))
+
+
+def _step(f, n_states: int, n_inputs: int, substeps: int):
+    """``step(x, U, h) -> x_next`` of ``substeps`` RK4 steps: unrolled when few (fastest to
+    run), a loop when many (its build time does not grow with ``substeps``)."""
+    if substeps <= MAX_UNROLLED:
+        return rk4_step(f, n_states, n_inputs, substeps)
+    import casadi as ca
+
+    substep = rk4_substep(lambda z, u, p: f(z, u), n_states, n_inputs, 0)
+    chained = chained_step(substep, n_inputs, substeps)
+    x, h = ca.MX.sym("x", n_states), ca.MX.sym("h")
+    stages = ca.MX.sym("U", n_inputs * (2 * substeps + 1))
+    return ca.Function("step", [x, stages, h], [chained(x, stages, h, ca.MX(0, 1))])
 
 
 def _check_points(model, x0, u):

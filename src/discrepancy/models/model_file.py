@@ -24,19 +24,23 @@ from ..data.containers import as_path
 from ..errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
 from ..resources import check_features
 from ..symbolic import IDENTIFIER, from_data, to_data
+from .model_parameters import decode_parameters, encode_parameters
 
 _NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
 FORMAT = "discrepancy-model"
-VERSION = 3
-#: keys of each version (version 1 files, written before components were stored, and
-#: version 2 files, before the fitted region and the forecast choice were, still load)
+VERSION = 4
+#: keys of each version (version 1 files, written before components were stored, version 2
+#: files, before the fitted region and the forecast choice were, and version 3 files, before
+#: every constructor parameter was (:mod:`discrepancy.models.model_parameters`), still load)
 KEYS = {1: {"format", "version", "written_by", "state_names", "input_names", "features",
             "coefficients", "prior", "user_functions", "metadata"}}
 KEYS[2] = KEYS[1] | {"optimizer", "differentiation_method", "fit"}
 KEYS[3] = KEYS[2] | {"region"}
+KEYS[4] = KEYS[3] | {"parameters"}
 #: keys of the ``fit`` record by version
 FIT_KEYS = {2: {"n_samples", "differentiation_choice"}}
 FIT_KEYS[3] = FIT_KEYS[2] | {"selection"}
+FIT_KEYS[4] = FIT_KEYS[3]
 #: larger files are refused before parsing (a model of 1000 terms x 100 states is ~2 MB)
 MAX_BYTES = 20 * 2**20
 
@@ -68,6 +72,7 @@ def encode(model) -> dict:
                 "differentiation_choice": _plain(model.differentiation_choice_),
                 "selection": None if chosen is None else _plain(chosen.summary())},
         "region": None if region is None else region.to_data(),
+        "parameters": encode_parameters(model),
         "metadata": {"optimizer": repr(model.optimizer_),
                      "feature_library": repr(model.feature_library),
                      "differentiation_method": repr(model.differentiation_method_)},
@@ -142,7 +147,8 @@ def read_json(path) -> dict:
 def decode(doc, *, prior=None, functions=None) -> dict:
     """Check a model file's content and return the fields ``from_state`` needs: names,
     coefficients ``(n, p)``, the library of stored terms, optimizer and differentiation
-    method, and the prior (the given callable, or the stored sympy expressions)."""
+    method, the prior (the given callable, or the stored sympy expressions) and, from
+    version 4, the constructor's ``parameters`` as given (see :mod:`.model_parameters`)."""
     from ..libraries import CustomLibrary
 
     version = _version(doc)
@@ -170,7 +176,8 @@ def decode(doc, *, prior=None, functions=None) -> dict:
             "optimizer": _component(doc, "optimizer", version),
             "differentiation_method": _component(doc, "differentiation_method", version),
             "differentiation_choice": choice,
-            "region": _region(doc, version, [*states, *inputs])}
+            "region": _region(doc, version, [*states, *inputs]),
+            "parameters": decode_parameters(doc["parameters"], _fail) if version >= 4 else {}}
 
 
 def _fit_record(fit, version: int) -> dict | None:
@@ -311,4 +318,5 @@ def _component(doc, key, version):
         return registry.create(doc[key])
     except DiscrepancyError as e:
         raise _fail(f"{key}: {e}") from None
+
 

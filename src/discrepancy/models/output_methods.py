@@ -55,6 +55,7 @@ class OutputErrorMethods:
         states along the fitted simulation and of the inputs (``simulate`` warns beyond).
         """
         keywords_only("fit_outputs", args, "u, outputs and the options")
+        self._refuse_maps("fit_outputs")
         from .output_fit import fit_outputs
 
         self._validate_params()
@@ -89,6 +90,7 @@ class OutputErrorMethods:
         """
         keywords_only("refine", args, "u, outputs and the options")
         self.check_is_fitted()
+        self._refuse_maps("refine")
         from .output_fit import refit_outputs
 
         before = self.coef_.copy()
@@ -117,11 +119,21 @@ class OutputErrorMethods:
         """
         keywords_only("estimate_initial_state", args, "u, outputs and the options")
         self.check_is_fitted()
+        self._refuse_maps("estimate_initial_state")
         from .output_fit import refit_outputs
 
         _, x0s, _ = refit_outputs(self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds,
                                   u_hold=u_hold, substeps=substeps, coefficients=False)
         return list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
+
+    def _refuse_maps(self, method: str) -> None:
+        """Output error integrates an ODE: a discrete-time model is refused by name."""
+        if self.discrete_time is True:
+            from ..errors import ParameterError
+            raise ParameterError(f"{method} simulates continuous-time models (an ODE with "
+                                 "RK4 between samples); this model is discrete_time=True. For "
+                                 "a map, fit the successors (fit(x, u=u)) or filter with "
+                                 "ExtendedKalmanFilter(model, ...)")
 
     def _fit_prior_outputs(self, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps):
         """The prior alone by output error: only the initial states are estimated."""

@@ -18,8 +18,7 @@ from .inputs import stage_inputs
 def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,
                   substeps: int) -> np.ndarray:
     """States ``(m - steps, n)``: row ``i`` predicts ``x[i + steps]`` from ``x[i]``."""
-    if not isinstance(steps, (int, np.integer)) or isinstance(steps, bool) or steps < 1:
-        raise ParameterError(f"steps must be a positive integer; got {steps!r}")
+    _check_steps(steps)
     if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or \
             not 1 <= substeps <= 1000:
         raise ParameterError(f"substeps must be an integer in [1, 1000]; got {substeps!r}")
@@ -39,6 +38,30 @@ def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,
                     (stages[j:j + starts, 2 * s + i] for i in range(3))
                 state = rk4_step(rhs, state, dt, u0, um, u1)
     return state
+
+
+def iterate_ahead(step, x, u, *, n_inputs: int, steps: int) -> np.ndarray:
+    """The map's states ``(m - steps, n)``: row ``i`` is ``x[i]`` sent ``steps`` times
+    through ``step(x, u) -> x_next`` with the inputs ``u[i], ..., u[i + steps - 1]``."""
+    _check_steps(steps)
+    m = x.shape[0]
+    if m <= steps:
+        raise ShapeError(f"x has {m} samples; predicting {steps} steps ahead needs more")
+    if n_inputs:
+        u = as_2d("u", u, n_cols=n_inputs, allow_1d=n_inputs == 1)
+        if len(u) != m:
+            raise ShapeError(f"u must have one row per sample of x ({m}); got {len(u)}")
+    starts = m - steps
+    state = x[:starts].copy()
+    with np.errstate(over="ignore", invalid="ignore"):
+        for j in range(steps):
+            state = step(state, u[j:j + starts] if n_inputs else None)
+    return state
+
+
+def _check_steps(steps) -> None:
+    if not isinstance(steps, (int, np.integer)) or isinstance(steps, bool) or steps < 1:
+        raise ParameterError(f"steps must be a positive integer; got {steps!r}")
 
 
 def rk4_step(rhs, x: np.ndarray, dt, u0=None, um=None, u1=None) -> np.ndarray:

@@ -31,9 +31,8 @@ class Prior:
             self._call = _adapt(prior)
         elif isinstance(prior, (list, tuple, sp.MatrixBase)):
             self.expressions = self._check_expressions(list(prior))
-            compiled = [self._compiled(i, e) for i, e in enumerate(self.expressions)]
-            self._call = lambda x, u: np.column_stack(
-                [f(x if u is None else np.hstack([x, u])) for f in compiled])
+            self._terms = [self._compiled(i, e) for i, e in enumerate(self.expressions)]
+            self._call = self._evaluate_expressions
         else:
             raise ParameterError("prior must be None, a callable f_m(x, u) or a list of "
                                  f"{self.n} sympy expressions; got {type(prior).__name__}")
@@ -49,6 +48,10 @@ class Prior:
             return compile_numpy(expr, self.names)
         except ExportError as e:
             raise PriorError(f"prior[{i}] = {expr} cannot be evaluated: {e}") from None
+
+    def _evaluate_expressions(self, x, u):
+        z = x if u is None else np.hstack([x, u])
+        return np.column_stack([f(z) for f in self._terms])
 
     @property
     def is_symbolic(self) -> bool:
@@ -103,5 +106,15 @@ def _adapt(f: Callable) -> Callable:
     except (TypeError, ValueError):
         return f
     if len(params) == 1 and params[0].kind != params[0].VAR_POSITIONAL:
-        return lambda x, u: f(x)
+        return _StatesOnly(f)
     return f
+
+
+class _StatesOnly:
+    """``f(x, u) -> f(x)`` for a prior of the states alone (a class, so it pickles)."""
+
+    def __init__(self, f: Callable):
+        self.f = f
+
+    def __call__(self, x, u):
+        return self.f(x)

@@ -61,6 +61,11 @@ class Constraints:
                 raise ParameterError(f"Constraints.{name} must be a list of ({{(state, term): "
                                      f"coefficient}}, bound) pairs; got "
                                      f"{describe(getattr(self, name))}")
+        # lists and tuples alike, so equal constraints compare equal (e.g. after a file)
+        for name in ("exact_equations", "equal", "at_most", "at_least"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+        if self.only is not None:
+            object.__setattr__(self, "only", {k: tuple(v) for k, v in self.only.items()})
 
     def compile(self, state_names: Sequence[str], terms: Sequence[str]) -> LinearConstraints:
         """Index form for equations ``state_names`` and library ``terms``."""

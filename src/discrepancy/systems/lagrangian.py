@@ -16,6 +16,7 @@ import sympy as sp
 from ..errors import ParameterError, ShapeError
 from ..symbolic import compile_numpy, symbol
 from .base import System
+from .mass_checks import check_kinetic, evaluate_mass, solve_mass
 from .mechanics import lagrange_equations
 
 
@@ -48,7 +49,9 @@ class LagrangianSystem(System):
 
     Args:
         kinetic, potential: ``T`` and ``V`` (J), sympy expressions of the coordinates and
-            rates (numbers substituted for every parameter).
+            rates (numbers substituted for every parameter); ``T`` must be positive for
+            every motion (its mass matrix ``∂²T/∂q̇²`` positive definite: checked at random
+            states, :mod:`~discrepancy.systems.mass_checks`).
         coordinates: names (or symbols) of the generalised coordinates ``q``, e.g.
             ``["phi"]``.
         rates: names of their time derivatives (default ``"d" + name``).
@@ -78,6 +81,7 @@ class LagrangianSystem(System):
             raise ParameterError(f"input_names {list(inputs)} repeat a coordinate or rate name")
         self.state_names, self.input_names = states, inputs
         self.kinetic = _expression(kinetic, "kinetic", states)
+        check_kinetic(self.kinetic, q, dq)
         self.potential = _expression(potential, "potential", q)
         self.dissipation = _expression(dissipation, "dissipation", states)
         if forces is not None and (isinstance(forces, (str, sp.Basic))
@@ -132,10 +136,9 @@ class LagrangianSystem(System):
                 raise ShapeError(f"u is required: (m, {r}) = {list(self.input_names)}")
             z = np.hstack([x, np.broadcast_to(np.asarray(u, float).reshape(-1, r), (m, r))])
         mass, rest = self._functions(friction)
-        matrix = np.stack([np.stack([np.broadcast_to(f(z), (m,)) for f in row], axis=-1)
-                           for row in mass], axis=-2)
+        matrix = evaluate_mass(mass, z)
         b = np.stack([np.broadcast_to(f(z), (m,)) for f in rest], axis=-1)
-        acc = np.linalg.solve(matrix, b[..., None])[..., 0]
+        acc = solve_mass(matrix, b, x, self.state_names)
         return np.hstack([x[:, len(self.position_names):], acc])
 
     def rhs(self, x, u=None) -> np.ndarray:
