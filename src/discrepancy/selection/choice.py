@@ -160,8 +160,7 @@ def _halo(setup) -> int:
 def _local_steps(setup, origins) -> int:
     """Steps spanning the smoothing window (at least 8): the stretch the origin state is
     refined on."""
-    halo = getattr(setup.differentiation, "halo", None) or 0
-    return max(8, -(-(2 * halo + 1) // origins.stride))
+    return max(8, -(-(2 * _halo(setup) + 1) // origins.stride))
 
 
 class _Search:
