@@ -7,6 +7,7 @@ import numpy as np
 
 from .._optional import require
 from ..errors import ParameterError, ShapeError, describe
+from ..runge_kutta import runge_kutta_step
 from ..symbolic import to_casadi
 
 ca = require("casadi", purpose="discrepancy.control")
@@ -66,9 +67,5 @@ def rk4_step(f: ca.Function, dt: float, substeps: int) -> ca.Function:
     h = dt / substeps
     x = x0
     for _ in range(substeps):
-        k1 = f(x, u)
-        k2 = f(x + h / 2 * k1, u)
-        k3 = f(x + h / 2 * k2, u)
-        k4 = f(x + h * k3, u)
-        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        x = runge_kutta_step(f, x, h, u, u, u)
     return ca.Function("F", [x0, u], [x], ["x", "u"], ["x_next"])

@@ -18,6 +18,7 @@ import scipy.integrate
 
 from ..data.trajectory import as_times
 from ..errors import ParameterError, ShapeError, SimulationError, describe
+from ..runge_kutta import runge_kutta_step
 from .inputs import input_law, stage_inputs
 
 ADAPTIVE = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
@@ -203,6 +204,11 @@ def _odeint(f, law, times, out, rtol, atol, options):
     return states
 
 
+def _timed(f):
+    """``f(t, x, u)`` as the ``rates(x, (t, u))`` of :func:`runge_kutta_step`."""
+    return lambda x, stage: f(stage[0], x, stage[1])
+
+
 def _fixed_step(f, times, out, substeps, stages):
     x = out[0].copy()
     for i in range(1, len(times)):
@@ -211,10 +217,6 @@ def _fixed_step(f, times, out, substeps, stages):
         s = None if stages is None else stages[i - 1]
         for j in range(substeps):
             u0, um, u1 = (None, None, None) if s is None else s[2 * j:2 * j + 3]
-            k1 = f(tau, x, u0)
-            k2 = f(tau + h / 2, x + h / 2 * k1, um)
-            k3 = f(tau + h / 2, x + h / 2 * k2, um)
-            k4 = f(tau + h, x + h * k3, u1)
-            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            x = runge_kutta_step(_timed(f), x, h, (tau, u0), (tau + h / 2, um), (tau + h, u1))
             tau += h
         out[i] = x
