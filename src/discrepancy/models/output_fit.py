@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError, ShapeError
+from ..optimizers.selection import one_standard_error
 from .output_error import (
     NEGLIGIBLE,
     RIDGE,
@@ -192,10 +193,11 @@ def _path(fit, x0s, max_terms, holdout, tolerance, progress):
 def choose(path, tolerance):
     """The sparsest support whose held-out error is within one standard error of the best
     (``tolerance=None``), or within ``tolerance`` (relative, of the RMS) of it."""
-    best = min(path, key=lambda s: s.heldout_mse)
     if tolerance is None:
-        bar = best.heldout_mse + best.heldout_se
-        return min((s for s in path if s.heldout_mse <= bar), key=lambda s: s.n_terms)
+        return path[one_standard_error([s.heldout_mse for s in path],
+                                       [s.heldout_se for s in path],
+                                       [s.n_terms for s in path])]
+    best = min(path, key=lambda s: s.heldout_mse)
     bar = (1 + tolerance) * best.heldout_error
     return min((s for s in path if s.heldout_error <= bar), key=lambda s: s.n_terms)
 
