@@ -21,6 +21,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..base import clone
 from ..data.trajectory import as_2d, as_times
 from ..differentiation import SavitzkyGolay
 from ..errors import ConvergenceError, DataError, ParameterError
@@ -29,12 +30,6 @@ from .dissipation_model import DissipationDiscrepancy
 from .metrics import error_summary
 from .record import PreparedRecording
 from .smoothing import smoothing_scores
-
-
-def clone(model: DissipationDiscrepancy) -> DissipationDiscrepancy:
-    """An unfitted copy with the same parameters."""
-    return type(model)(**model.get_params(deep=False))
-
 
 #: fewest training seconds a forecast origin leaves for the fit, as a share of training
 MIN_FIT_SHARE = 0.3
