@@ -3,9 +3,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import numpy as np
-
 from .._optional import require
+from ..constraints import Integral, Interval, check_argument
 from ..errors import ParameterError, ShapeError, describe
 from ..runge_kutta import runge_kutta_step
 from ..symbolic import to_casadi
@@ -57,9 +56,7 @@ def as_casadi(model) -> ca.Function:
 
 def rk4_step(f: ca.Function, dt: float, substeps: int) -> ca.Function:
     """``F(x, u) -> x(t + dt)``: ``substeps`` classical Runge–Kutta steps with ``u`` held."""
-    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or \
-            not 1 <= substeps <= 1000:
-        raise ParameterError(f"substeps must be an integer in [1, 1000]; got {substeps!r}")
+    check_argument("substeps", substeps, Interval(Integral, 1, 1000))
     substeps = int(substeps)
     n, r = f.size1_in(0), f.size1_in(1)
     x0 = ca.SX.sym("x", n)

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..base import clone
+from ..constraints import Integral, Interval, Real, check_argument
 from ..data.trajectory import as_2d, as_times
 from ..differentiation import SavitzkyGolay
 from ..errors import ConvergenceError, DataError, ParameterError
@@ -209,8 +210,7 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
     """
     q = as_2d("q", q, allow_1d=True)
     t = as_times("t", t, len(q))
-    if not isinstance(split, (int, np.integer)) or not 10 <= split < len(q):
-        raise ParameterError(f"split must be a sample index in [10, {len(q)}); got {split!r}")
+    check_argument("split", split, Interval(Integral, 10, len(q), closed="left"))
     if isinstance(n_origins, bool) or not isinstance(n_origins, (int, np.integer)) or \
             not 2 <= n_origins <= min(MAX_ORIGINS, split // 2):
         raise ParameterError(f"n_origins must be an integer in [2, "
@@ -234,9 +234,8 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
     training = float(t[-1] - t[0])
     if horizon is None:
         horizon = min(validation, training / 3)
-    elif not isinstance(horizon, (int, float)) or not 0 < horizon < training:
-        raise ParameterError(f"horizon must be a length in (0, {training:.4g}) s; got "
-                             f"{horizon!r}")
+    else:
+        check_argument("horizon (s)", horizon, Interval(Real, 0, training, closed="neither"))
     for candidate in candidates.values():
         candidate._validate_params()
     starts = _origins(t, len(t) - 1, float(horizon), n_origins)

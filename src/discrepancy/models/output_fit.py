@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..constraints import Integral, Interval, Real, check_argument
 from ..errors import ParameterError, ShapeError
 from ..optimizers.selection import one_standard_error
 from .output_error import (
@@ -114,16 +115,9 @@ def _prior_start(fit, x0s, rows, *, guessed: bool):
 
 
 def _check_options(max_terms, holdout, tolerance):
-    if max_terms is not None and (not isinstance(max_terms, (int, np.integer))
-                                  or isinstance(max_terms, bool) or max_terms < 1):
-        raise ParameterError(f"max_terms must be a positive integer or None; got {max_terms!r}")
-    if not isinstance(holdout, (int, float)) or isinstance(holdout, bool) or \
-            not 0.05 <= holdout <= 0.5:
-        raise ParameterError(f"holdout must be a fraction in [0.05, 0.5]; got {holdout!r}")
-    if tolerance is not None and (not isinstance(tolerance, (int, float))
-                                  or isinstance(tolerance, bool) or not 0 <= tolerance <= 1):
-        raise ParameterError(f"tolerance must be None (one standard error) or a number in "
-                             f"[0, 1]; got {tolerance!r}")
+    check_argument("max_terms", max_terms, None, Interval(Integral, 1))
+    check_argument("holdout", holdout, Interval(Real, 0.05, 0.5))
+    check_argument("tolerance", tolerance, None, Interval(Real, 0, 1))
 
 
 def _allowed(setup) -> np.ndarray:

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..constraints import Integral, Interval, check_argument
 from ..data.trajectory import as_2d, as_times
-from ..errors import ParameterError, ShapeError
+from ..errors import ShapeError
 from ..runge_kutta import runge_kutta_step
 from .inputs import stage_inputs
 
@@ -20,9 +21,7 @@ def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,
                   substeps: int) -> np.ndarray:
     """States ``(m - steps, n)``: row ``i`` predicts ``x[i + steps]`` from ``x[i]``."""
     _check_steps(steps)
-    if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or \
-            not 1 <= substeps <= 1000:
-        raise ParameterError(f"substeps must be an integer in [1, 1000]; got {substeps!r}")
+    check_argument("substeps", substeps, Interval(Integral, 1, 1000))
     m = x.shape[0]
     if m <= steps:
         raise ShapeError(f"x has {m} samples; predicting {steps} steps ahead needs more")
@@ -61,8 +60,7 @@ def iterate_ahead(step, x, u, *, n_inputs: int, steps: int) -> np.ndarray:
 
 
 def _check_steps(steps) -> None:
-    if not isinstance(steps, (int, np.integer)) or isinstance(steps, bool) or steps < 1:
-        raise ParameterError(f"steps must be a positive integer; got {steps!r}")
+    check_argument("steps", steps, Interval(Integral, 1))
 
 
 def checked_states(model, x, u):

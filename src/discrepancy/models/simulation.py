@@ -16,6 +16,7 @@ from collections.abc import Callable
 import numpy as np
 import scipy.integrate
 
+from ..constraints import Integral, Interval, Options, Real, check_argument
 from ..data.trajectory import as_times
 from ..errors import ParameterError, ShapeError, SimulationError, describe
 from ..runge_kutta import runge_kutta_step
@@ -49,20 +50,11 @@ def _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws):
                              f"max_evaluations, compiled, integrator, integrator_kws, "
                              f"interpolator, interpolator_kws, {', '.join(SOLVER_OPTIONS)} (for "
                              f"adaptive methods), {', '.join(ODEINT_OPTIONS)} (for odeint)")
-    if not isinstance(method, str) or method not in METHODS:
-        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+    check_argument("method", method, Options(METHODS))
     for name, value in (("rtol", rtol), ("atol", atol)):
-        if not isinstance(value, (int, float)) or isinstance(value, bool) or \
-                not 0 < value < np.inf:
-            raise ParameterError(f"{name} must be a positive number; got {value!r}")
-    if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or \
-            not 1 <= substeps <= 10_000:
-        raise ParameterError(f"substeps must be an integer in [1, 10000]; got {substeps!r}")
-    if max_evaluations is not None and (not isinstance(max_evaluations, (int, np.integer))
-                                        or isinstance(max_evaluations, bool)
-                                        or max_evaluations < 1):
-        raise ParameterError(f"max_evaluations must be a positive integer or None; got "
-                             f"{max_evaluations!r}")
+        check_argument(name, value, Interval(Real, 0, closed="neither"))
+    check_argument("substeps", substeps, Interval(Integral, 1, 10_000))
+    check_argument("max_evaluations", max_evaluations, None, Interval(Integral, 1))
 
 
 def check_options(options: dict) -> None:

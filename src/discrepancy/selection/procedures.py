@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..base import clone
+from ..constraints import Integral, Interval, check_argument
 from ..data.trajectory import as_trajectories
 from ..errors import ConvergenceError, DataError, ParameterError, describe
 from ..libraries import FeatureLibrary
@@ -89,9 +90,7 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     from tqdm.auto import tqdm
 
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
-    if not isinstance(n_origins, (int, np.integer)) or isinstance(n_origins, bool) or \
-            n_origins < 2:
-        raise ParameterError(f"n_origins must be an integer >= 2; got {n_origins!r}")
+    check_argument("n_origins", n_origins, Interval(Integral, 2))
     templates = _templates(model, candidates, records, outputs)
     fit_kws = dict(fit_kws or {})
     shortest = min(r.n_samples for r in records)
