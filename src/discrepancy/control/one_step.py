@@ -25,7 +25,7 @@ class OneStepFit:
     """The fixed-point fit for a model's set-up.
 
     Args:
-        setup: the model's frozen :class:`~discrepancy.models.setup.FitSetup`.
+        setup: the model's frozen :class:`~discrepancy.fitting.setup.FitSetup`.
         template: the unfitted model whose ``fit_statistics`` chooses the terms.
         substeps: RK4 steps per interval; max_sweeps: most fixed-point iterations.
     """

@@ -24,8 +24,8 @@ from ..errors import (
     ShapeError,
     describe,
 )
-from ..models.prior import Prior
-from ..models.setup import resolve_names
+from ..fitting.prior import Prior
+from ..fitting.setup import resolve_names
 
 BACKENDS = ("auto", "casadi", "numpy")
 

@@ -11,20 +11,22 @@ default, or a ``distributed`` cluster when a ``Client`` is active. A worker lost
 mid-fit is handled by Dask recomputing its blocks from their inputs; every block
 is a pure function of its rows, so nothing is lost or counted twice.
 
-:func:`fit_sources` does the same for a list of files (one ``dask.delayed``
-task per :class:`~discrepancy.streaming.ChunkSource`, each streamed on a worker).
+:func:`source_statistics` does the same for a list of files (one ``dask.delayed``
+task per :class:`~discrepancy.data.chunks.ChunkSource`, each streamed on a worker).
+Neither knows a model: they take the ``make_setup`` (and ``sample_rows``) a model passes.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ._optional import require
+from .._optional import require
+from ..data.chunks import ChunkSource, step_of
+from ..data.trajectory import Trajectory
+from ..data.validation import check_array
+from ..errors import ParameterError, ShapeError, describe
+from ..optimizers.gram import GramStatistics
 from .accumulate import BlockAccumulator
-from .data.chunks import ChunkSource, step_of
-from .data.trajectory import Trajectory
-from .data.validation import check_array
-from .errors import ParameterError, ShapeError, describe
-from .optimizers.gram import GramStatistics
+from .streaming import source_setup, stream_statistics
 
 SPLIT_EVERY = 8
 
@@ -58,11 +60,10 @@ def _block(rows, x, *rest, setup, step, halo, n_total, trajectory, offset):
     return stats.to_vector()[None, :]
 
 
-def _sample(model, xs, us, xds, step) -> list[Trajectory]:
-    """The first rows of the dask trajectories, computed, for choices made from the data."""
-    from .streaming import sample_rows_of
-
-    budget, out = sample_rows_of(model), []
+def _sample(budget: int, xs, us, xds, step) -> list[Trajectory]:
+    """The first ``budget`` rows of the dask trajectories, computed, for choices made from
+    the data."""
+    out = []
     for x, u, xd in zip(xs, us, xds, strict=True):
         if budget <= 0:
             break
@@ -135,9 +136,11 @@ def _row_chunks(m: int, size: int, need: int) -> tuple[int, ...]:
     return tuple(c for c in chunks if c)
 
 
-def dask_statistics(model, x, *, t=None, u=None, x_dot=None):
-    """``(setup, stats)`` of dask arrays for ``model.fit`` (``x`` one array or a list, one
-    per trajectory)."""
+def dask_statistics(make_setup, sample_rows: int, x, *, t=None, u=None, x_dot=None):
+    """``(setup, stats)`` of dask arrays (``x`` one array or a list, one per trajectory).
+
+    ``make_setup(n_states, n_inputs, sample=...)`` gives the set-up from the first
+    ``sample_rows`` rows (a model passes its ``make_setup``)."""
     require("dask.array", purpose="fitting dask arrays")
     xs = list(x) if isinstance(x, (list, tuple)) else [x]
     us = _per_trajectory("u", u, len(xs))
@@ -150,7 +153,7 @@ def dask_statistics(model, x, *, t=None, u=None, x_dot=None):
     for k, xk in enumerate(xs):
         if xk.shape[0] == 0:
             raise ShapeError(f"x[{k}] has no rows")
-    setup = model.make_setup(n, r, sample=_sample(model, xs, us, xds, step))
+    setup = make_setup(n, r, sample=_sample(sample_rows, xs, us, xds, step))
     graphs, offset = [], 0
     for k, (xk, uk, xdk) in enumerate(zip(xs, us, xds, strict=True)):
         if xk.ndim != 2 or xk.shape[1] != n:
@@ -231,8 +234,6 @@ def _per_trajectory(name, value, k):
 
 
 def _source_stats(setup, source, step):
-    from .streaming import stream_statistics
-
     def same_layout(n, r, sample):
         if (n, r) != (setup.n_states, setup.n_inputs):
             raise ShapeError(f"{n} states and {r} inputs; the first source has "
@@ -242,10 +243,11 @@ def _source_stats(setup, source, step):
     return stream_statistics(source, step, same_layout, progress=False, n_threads=1)[1]
 
 
-def fit_sources(model, sources, *, t=None):
-    """Fit ``model`` on a list of :class:`~discrepancy.streaming.ChunkSource` (e.g. one
-    :class:`~discrepancy.data.sources.HDF5Source` per file), one ``dask.delayed`` task
-    each, summed as a tree. Returns the model."""
+def source_statistics(make_setup, sample_rows: int, sources, *, t=None):
+    """``(setup, stats)`` of a list of :class:`~discrepancy.data.chunks.ChunkSource` (e.g.
+    one :class:`~discrepancy.data.sources.HDF5Source` per file), one ``dask.delayed`` task
+    each, summed as a tree; the set-up is made from the first source's first
+    ``sample_rows`` rows."""
     delayed = require("dask", purpose="fit_sources").delayed
 
     sources = list(sources)
@@ -255,16 +257,14 @@ def fit_sources(model, sources, *, t=None):
     if bad:
         raise ParameterError(f"sources[{bad[0]}] must be a ChunkSource (HDF5Source, NPZFiles, "
                              f"...); got {describe(sources[bad[0]])}")
-    from .streaming import setup_from_source
-
-    setup = setup_from_source(model, sources[0], step_of(t))
+    setup = source_setup(make_setup, sample_rows, sources[0], step_of(t))
     step = step_of(t)
     parts = [delayed(_source_stats)(setup, s, step) for s in sources]
     while len(parts) > 1:
         parts = [delayed(_merged)(parts[i:i + SPLIT_EVERY]) for i in range(0, len(parts),
                                                                          SPLIT_EVERY)]
     (total,) = _compute(parts[0])
-    return model.fit_statistics(total, setup)
+    return setup, total
 
 
 def _merged(parts: list[GramStatistics]) -> GramStatistics:

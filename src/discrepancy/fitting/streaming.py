@@ -1,8 +1,8 @@
 """Chunked fitting: data that arrive in pieces, or do not fit in memory.
 
 What a chunk is
-    A :class:`Chunk` holds consecutive rows of ONE trajectory in time order:
-    ``x`` ``(k, n)`` and optionally ``t`` ``(k,)`` (the times of these rows),
+    A :class:`~discrepancy.data.chunks.Chunk` holds consecutive rows of ONE trajectory in
+    time order: ``x`` ``(k, n)`` and optionally ``t`` ``(k,)`` (the times of these rows),
     ``u`` ``(k, r)`` and ``x_dot`` ``(k, n)``. A plain array is a chunk of ``x``;
     a mapping with keys among ``x, t, u, x_dot`` is converted. Chunks without
     ``t`` are placed on the grid ``t = row * step`` with ``step`` the ``t`` given to
@@ -11,8 +11,9 @@ What a chunk is
 
 What a trajectory is
     ``model.fit(iterator_of_chunks)`` is one trajectory; a list of such
-    iterators, or a :class:`ChunkSource` (files, see :mod:`discrepancy.data.sources`),
-    gives several. Derivatives never straddle the join of two trajectories.
+    iterators, or a :class:`~discrepancy.data.chunks.ChunkSource` (files, see
+    :mod:`discrepancy.data.sources`), gives several. Derivatives never straddle the join
+    of two trajectories.
 
 Exactness
     A local differentiation method (``halo`` rows each side, e.g. finite
@@ -20,7 +21,7 @@ Exactness
     rows plus the next chunk, keeping only rows whose stencil lies inside the
     window (and the true ends of the trajectory), so every derivative is the one
     the whole trajectory gives. Rows then go through the same fixed block grid
-    as the in-memory fit (:mod:`discrepancy.accumulate`), so the Gram statistics,
+    as the in-memory fit (:mod:`discrepancy.fitting.accumulate`), so the Gram statistics,
     and the model, equal the in-memory ones (to rounding in the derivative's
     time step). Global methods (``halo`` None: splines, trend filtering, Kalman)
     are refused: their derivative at one row depends on the whole trajectory;
@@ -33,23 +34,14 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
+from tqdm.auto import tqdm
 
+from ..data.chunks import FIELDS, Chunk, ChunkSource, as_source, step_of, validated_chunks
+from ..data.trajectory import Trajectory
+from ..errors import ParameterError, ShapeError
 from .accumulate import BLOCK_ROWS, BlockAccumulator
-from .data.chunks import (  # noqa: F401  (Chunk, ChunkSource, peek_layout: public here too)
-    FIELDS,
-    Chunk,
-    ChunkSource,
-    IterableSource,
-    _Layout,
-    _validated,
-    as_source,
-    peek_layout,
-    step_of,
-)
-from .data.trajectory import Trajectory
-from .errors import ParameterError, ShapeError
 
-__all__ = ["Chunk", "ChunkSource", "IterableSource", "chunk_statistics", "stream_statistics"]
+__all__ = ["chunk_statistics", "source_setup", "stream_statistics"]
 
 
 # ------------------------------------------------------------------ stitching
@@ -137,23 +129,21 @@ class _RowFeeder:
         self.acc.finish_trajectory()
 
 
-def stream_statistics(source: ChunkSource, step: float, setup_for: Callable, *,
+def stream_statistics(source: ChunkSource, step: float, make_setup: Callable, *,
                       sample_rows: int = 0, progress: bool | None = None,
                       n_threads: int | None = None):
     """``(setup, stats)``: the Gram statistics of all rows of ``source``.
 
-    ``setup_for(n_states, n_inputs, sample)`` gives the
-    :class:`~discrepancy.models.setup.FitSetup` once the first ``sample_rows`` rows (over
+    ``make_setup(n_states, n_inputs, sample=...)`` gives the
+    :class:`~discrepancy.fitting.setup.FitSetup` once the first ``sample_rows`` rows (over
     trajectories, in order; at least the first chunk) have been read and validated:
     ``sample`` holds them as trajectories, so that choices made from the data (the
     default smoothing) see the same rows as an in-memory fit would. Every trajectory must
     have the layout of the first.
     """
-    from tqdm.auto import tqdm
-
     sample, trajectories = _prefetch(source, step, max(sample_rows, 1))
     layout = sample[0][0]
-    setup = setup_for(layout.n, layout.r, [_joined(chunks) for _, chunks, _ in sample])
+    setup = make_setup(layout.n, layout.r, sample=[_joined(chunks) for _, chunks, _ in sample])
     acc = BlockAccumulator(setup.transform, setup.new_statistics(), n_threads=n_threads,
                            names=setup.names)
     feeder = _RowFeeder(acc)
@@ -186,7 +176,7 @@ def _prefetch(source: ChunkSource, step: float, budget: int):
     it = enumerate(source.trajectories())
     sample, layout, rows = [], None, 0
     for k, items in it:
-        stream = _validated(items, k, step, layout)
+        stream = validated_chunks(items, k, step, layout)
         read = []
         for lay, chunk in stream:
             layout = lay
@@ -206,7 +196,7 @@ def _prefetch(source: ChunkSource, step: float, budget: int):
         for _, read, rest in sample:
             yield _chain(read, (chunk for _, chunk in rest))
         for k, items in it:
-            stream = _validated(items, k, step, layout)
+            stream = validated_chunks(items, k, step, layout)
             first = next(stream, None)
             if first is None:
                 raise ShapeError(f"trajectory {k} of x has no rows")
@@ -228,33 +218,22 @@ def _chain(first: list, rest):
     yield from rest
 
 
-def chunk_statistics(model, x, *, t=None, u=None, x_dot=None):
-    """``(setup, stats)`` of chunked input for ``model.fit`` (see the module docstring)."""
+def chunk_statistics(make_setup: Callable, sample_rows: int, x, *, t=None, u=None,
+                     x_dot=None):
+    """``(setup, stats)`` of chunked input ``x`` (see the module docstring).
+
+    ``make_setup(n_states, n_inputs, sample=...)``: the set-up once the first
+    ``sample_rows`` rows are read (a model passes its ``make_setup`` and
+    :func:`~discrepancy.fitting.setup.sample_rows` of its differentiation method)."""
     if u is not None or x_dot is not None:
         raise ParameterError("with chunked x, give u and x_dot inside the chunks "
                              "(Chunk(x, u=..., x_dot=...)), not as separate arguments")
-    return stream_statistics(as_source(x), step_of(t), _setup_for(model),
-                             sample_rows=sample_rows_of(model))
+    return stream_statistics(as_source(x), step_of(t), make_setup, sample_rows=sample_rows)
 
 
-def _setup_for(model):
-    return lambda n, r, sample: model.make_setup(n, r, sample=sample)
-
-
-def setup_from_source(model, source: ChunkSource, step: float):
-    """``model.make_setup`` from the layout and first rows of ``source`` (read, not fitted)."""
-    sample, _ = _prefetch(source, step, max(sample_rows_of(model), 1))
+def source_setup(make_setup: Callable, sample_rows: int, source: ChunkSource, step: float):
+    """``make_setup`` from the layout and first ``sample_rows`` rows of ``source`` (read,
+    not fitted)."""
+    sample, _ = _prefetch(source, step, max(sample_rows, 1))
     layout = sample[0][0]
-    return model.make_setup(layout.n, layout.r,
-                            sample=[_joined(chunks) for _, chunks, _ in sample])
-
-
-def sample_rows_of(model) -> int:
-    """Rows read before the set-up is made: what a data-driven differentiation method of
-    ``model`` looks at, and at least what sizes the cross-validation segments."""
-    from .differentiation import get_differentiation_method
-    from .models.setup import FOLD_PROBE_ROWS
-
-    method = get_differentiation_method(model.differentiation_method)
-    own = int(method.sample_rows) if getattr(method, "data_driven", False) else 0
-    return max(own, FOLD_PROBE_ROWS)
+    return make_setup(layout.n, layout.r, sample=[_joined(chunks) for _, chunks, _ in sample])

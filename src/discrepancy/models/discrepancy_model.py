@@ -20,6 +20,9 @@ from ..data.trajectory import Trajectory, as_2d, as_trajectories, is_number
 from ..data.validation import as_float_array, check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
+from ..fitting.distributed import dask_statistics
+from ..fitting.setup import FitSetup, sample_rows
+from ..fitting.streaming import chunk_statistics
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..optimizers.wrapped import REGRESSOR
@@ -32,7 +35,7 @@ from .output_methods import OutputErrorMethods
 from .prediction_error_methods import PredictionErrorMethods
 from .pysindy_interface import PySINDyInterface
 from .region import guard, guard_run
-from .setup import FitSetup, resolve_setup
+from .resolve import resolve_setup
 from .simulation import integrate
 from .term_constraints import Constraints
 
@@ -141,12 +144,10 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
                                  "the model's state_names and input_names")
         if kind != "chunks":  # chunks may carry their own times
             require_t("fit", t, needed=x_dot is None and not self.discrete_time)
-        if kind == "dask":
-            from ..distributed import dask_statistics
-            setup, stats = dask_statistics(self, x, t=t, u=u, x_dot=x_dot)
-        elif kind == "chunks":
-            from ..streaming import chunk_statistics
-            setup, stats = chunk_statistics(self, x, t=t, u=u, x_dot=x_dot)
+        if kind in ("dask", "chunks"):  # the set-up is made once the first rows are read
+            statistics = dask_statistics if kind == "dask" else chunk_statistics
+            setup, stats = statistics(self.make_setup, sample_rows(self.differentiation_method),
+                                      x, t=t, u=u, x_dot=x_dot)
         else:
             trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
             first = trajectories[0]

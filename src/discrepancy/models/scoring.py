@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..accumulate import not_finite
 from ..errors import DataError, ParameterError, ShapeError, describe
+from ..fitting.accumulate import not_finite
 from ..resources import check_memory, n_bytes
 from .checks import model_data
 

@@ -34,7 +34,7 @@ class ShootingModel:
     """The discretised hybrid model of one set-up, with all ``n p`` coefficients free.
 
     Args:
-        setup: a :class:`~discrepancy.models.setup.FitSetup` (names, prior, library).
+        setup: a :class:`~discrepancy.fitting.setup.FitSetup` (names, prior, library).
         substeps: RK4 steps per sample interval.
         check_points: ``(states, inputs)`` on which a traced callable prior is checked.
     """

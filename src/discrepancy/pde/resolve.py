@@ -12,9 +12,9 @@ import copy
 from ..differentiation import Differentiator, get_differentiation_method
 from ..differentiation.spatial import SpatialDifferentiator, get_spatial_method
 from ..errors import ParameterError
+from ..fitting.setup import resolve_names
 from ..libraries import FeatureLibrary, PolynomialLibrary
 from ..libraries.pde import PDELibrary, library_derivative_order
-from ..models.setup import resolve_names
 from ..optimizers import get_optimizer
 from .prior import FieldPrior
 from .setup import FieldSetup

@@ -127,8 +127,8 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
 
 
 def _templates(model, candidates, records, outputs) -> dict:
+    from ..fitting.setup import resolve_names
     from ..models import DiscrepancyModel
-    from ..models.setup import resolve_names
     from .candidate_libraries import default_libraries
     from .output_checks import state_count
 
@@ -231,7 +231,7 @@ class _StateForecasts(_Judge):
         return float(np.mean(forecast_scores(setup, origins, coef, everything, steps).score))
 
     def _windows(self, setup, fraction):
-        from .held_out import Window
+        from ..fitting.held_out import Window
 
         pre, windows = setup.new_held_out().pre, []
         for rec in self.records:
