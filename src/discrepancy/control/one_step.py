@@ -92,7 +92,7 @@ def _refit(stats, support) -> np.ndarray:
 def _flow_functions(setup, substeps: int):
     """CasADi ``flow(x, u, vec(Ξ), dt)`` (the hybrid model's held-input RK4 step with
     coefficients ``Ξ``) and ``theta(x, u)`` (the library's columns), for one sample each."""
-    from ..models.casadi_form import library_columns, prior_expression
+    from ..hybrid.casadi_form import library_columns, prior_expression
 
     n, r, p = setup.n_states, setup.n_inputs, setup.n_features
     x, u = ca.SX.sym("x", n), ca.SX.sym("u", r)

@@ -153,7 +153,7 @@ def check_points(n: int, r: int):
 
 
 def _model_function(model):
-    from ..models.casadi_form import _casadi, hybrid_function
+    from ..hybrid.casadi_form import _casadi, hybrid_function
 
     ca = _casadi()
     f = hybrid_function(model, check_points=check_points(model.n_states_, model.n_inputs_))
@@ -161,7 +161,7 @@ def _model_function(model):
 
 
 def _prior_function(prior: Prior):
-    from ..models.casadi_form import _casadi, prior_expression
+    from ..hybrid.casadi_form import _casadi, prior_expression
 
     ca = _casadi()
     n, r = prior.n, len(prior.names) - prior.n

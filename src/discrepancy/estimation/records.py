@@ -7,8 +7,8 @@ import numpy as np
 from ..data.trajectory import _as_list
 from ..data.validation import as_float_array, check_array, check_times
 from ..errors import ConvergenceError, DataError, ShapeError
-from ..models.casadi_form import stage_columns
-from ..models.inputs import stage_inputs
+from ..hybrid.casadi_form import stage_columns
+from ..hybrid.inputs import stage_inputs
 from ..resources import check_memory, n_bytes
 from .dynamics import check_state
 from .noise import initial_covariance

@@ -318,7 +318,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         """Trajectory of the hybrid model from ``x0`` ``(n,)`` at times ``t`` ``(k,)``.
 
         ``u`` is an array ``(k, r)`` sampled at ``t`` (between samples ``u_hold="linear"``,
-        ``"zoh"`` or ``"bandlimited"``, see :mod:`discrepancy.models.inputs`) or a callable
+        ``"zoh"`` or ``"bandlimited"``, see :mod:`discrepancy.hybrid.inputs`) or a callable
         ``u(t) -> (r,)``. Keyword arguments go to
         :func:`discrepancy.models.simulation.integrate` (``method``, ``rtol``, ``atol``,
         ``substeps``, ``max_evaluations``); a model with a discontinuous term (``sign``) is

@@ -16,8 +16,8 @@ import numpy as np
 
 from ..data.trajectory import as_trajectories
 from ..errors import ConvergenceError, SelectionWarning
-from ..models.outputs import OutputMap
-from ..models.region import FittedRegion
+from ..hybrid.outputs import OutputMap
+from .region import FittedRegion
 
 #: the share of every record held out to judge a refit
 HOLDOUT = 0.25
@@ -72,7 +72,7 @@ def check_refine(model, before: np.ndarray, y, t, u, *, outputs, x0, x0_bounds, 
     every record and compare held-out forecasts with ``before``'s. Returns
     ``{"kept_original", "heldout_error_original", "heldout_error_refined"}`` (scaled RMS
     output errors on the held-out parts)."""
-    from ..models.output_fit import refit_outputs
+    from .output_fit import refit_outputs
 
     records = as_trajectories(y, t, u, x_name="y")
     cut = [int(round(r.n_samples * (1 - HOLDOUT))) for r in records]

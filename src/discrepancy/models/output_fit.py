@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError, ShapeError
+from ..hybrid.outputs import OutputMap
 from .output_error import (
     NEGLIGIBLE,
     RIDGE,
@@ -19,7 +20,6 @@ from .output_error import (
     warn_if_not_converged,
 )
 from .output_error import x0_bounds as bounds_of
-from .outputs import OutputMap
 from .shooting import ShootingModel
 
 #: simulations allowed per support on the path (the final refit may use more)

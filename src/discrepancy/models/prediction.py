@@ -12,7 +12,7 @@ import numpy as np
 
 from ..data.trajectory import as_2d, as_times
 from ..errors import ParameterError, ShapeError
-from .inputs import stage_inputs
+from ..hybrid.inputs import stage_inputs
 
 
 def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,

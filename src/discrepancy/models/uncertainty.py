@@ -31,6 +31,7 @@ from ..errors import ParameterError
 from ..optimizers import GramStatistics
 from ..optimizers.resampling import from_blocks
 from ..resources import check_memory, n_bytes
+from ..selection.candidates import FoldFits
 from .checks import model_data
 
 BOOTSTRAP_CONSTRAINTS = {
@@ -211,8 +212,6 @@ def _resample_fit(model, stats) -> np.ndarray:
         opt = copy.deepcopy(model.optimizer_)
         opt.fit_statistics(stats)
         return opt.coef_
-    from ..selection.candidates import FoldFits
-
     constraints = getattr(model.setup_.optimizer, "constraints", None)
     return FoldFits(stats, constraints, 0.0).coefficients(model.coef_ != 0, None)
 
