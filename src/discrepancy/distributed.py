@@ -3,7 +3,6 @@ model, is :mod:`discrepancy.fitting.distributed`; ``model.fit(dask_array)`` uses
 from __future__ import annotations
 
 from .fitting.distributed import source_statistics
-from .fitting.setup import sample_rows
 
 __all__ = ["fit_sources"]
 
@@ -13,6 +12,6 @@ def fit_sources(model, sources, *, t=None):
     :class:`~discrepancy.data.sources.HDF5Source` per file), one ``dask.delayed`` task
     each, summed as a tree. ``t``: the time step of sources without times. Returns the
     model."""
-    setup, stats = source_statistics(model.make_setup, sample_rows(model.differentiation_method),
-                                     sources, t=t)
+    setup, stats = source_statistics(model.make_setup, model.differentiation_method, sources,
+                                     t=t)
     return model.fit_statistics(stats, setup)

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from .data.chunks import Chunk, ChunkSource, IterableSource
 from .fitting import streaming
-from .fitting.setup import sample_rows
 from .fitting.streaming import stream_statistics
 
 __all__ = ["Chunk", "ChunkSource", "IterableSource", "chunk_statistics", "stream_statistics"]
@@ -14,5 +13,5 @@ __all__ = ["Chunk", "ChunkSource", "IterableSource", "chunk_statistics", "stream
 def chunk_statistics(model, x, *, t=None, u=None, x_dot=None):
     """``(setup, stats)``: the Gram statistics of chunked ``x`` with ``model``'s set-up
     (what ``model.fit(x)`` solves)."""
-    return streaming.chunk_statistics(model.make_setup, sample_rows(model.differentiation_method),
-                                      x, t=t, u=u, x_dot=x_dot)
+    return streaming.chunk_statistics(model.make_setup, model.differentiation_method, x, t=t,
+                                      u=u, x_dot=x_dot)

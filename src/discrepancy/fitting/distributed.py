@@ -13,7 +13,7 @@ is a pure function of its rows, so nothing is lost or counted twice.
 
 :func:`source_statistics` does the same for a list of files (one ``dask.delayed``
 task per :class:`~discrepancy.data.chunks.ChunkSource`, each streamed on a worker).
-Neither knows a model: they take the ``make_setup`` (and ``sample_rows``) a model passes.
+Neither knows a model: they take the ``make_setup`` and differentiation method a model passes.
 """
 from __future__ import annotations
 
@@ -26,6 +26,7 @@ from ..data.validation import check_array
 from ..errors import ParameterError, ShapeError, describe
 from ..optimizers.gram import GramStatistics
 from .accumulate import BlockAccumulator
+from .setup import sample_rows
 from .streaming import source_setup, stream_statistics
 
 SPLIT_EVERY = 8
@@ -136,11 +137,12 @@ def _row_chunks(m: int, size: int, need: int) -> tuple[int, ...]:
     return tuple(c for c in chunks if c)
 
 
-def dask_statistics(make_setup, sample_rows: int, x, *, t=None, u=None, x_dot=None):
+def dask_statistics(make_setup, differentiation_method, x, *, t=None, u=None, x_dot=None):
     """``(setup, stats)`` of dask arrays (``x`` one array or a list, one per trajectory).
 
-    ``make_setup(n_states, n_inputs, sample=...)`` gives the set-up from the first
-    ``sample_rows`` rows (a model passes its ``make_setup``)."""
+    ``make_setup(n_states, n_inputs, sample=...)`` gives the set-up (a model passes its
+    own) from the first rows, as many as ``differentiation_method`` chooses from
+    (:func:`~discrepancy.fitting.setup.sample_rows`)."""
     require("dask.array", purpose="fitting dask arrays")
     xs = list(x) if isinstance(x, (list, tuple)) else [x]
     us = _per_trajectory("u", u, len(xs))
@@ -153,7 +155,8 @@ def dask_statistics(make_setup, sample_rows: int, x, *, t=None, u=None, x_dot=No
     for k, xk in enumerate(xs):
         if xk.shape[0] == 0:
             raise ShapeError(f"x[{k}] has no rows")
-    setup = make_setup(n, r, sample=_sample(sample_rows, xs, us, xds, step))
+    setup = make_setup(n, r, sample=_sample(sample_rows(differentiation_method), xs, us, xds,
+                                            step))
     graphs, offset = [], 0
     for k, (xk, uk, xdk) in enumerate(zip(xs, us, xds, strict=True)):
         if xk.ndim != 2 or xk.shape[1] != n:
@@ -243,11 +246,11 @@ def _source_stats(setup, source, step):
     return stream_statistics(source, step, same_layout, progress=False, n_threads=1)[1]
 
 
-def source_statistics(make_setup, sample_rows: int, sources, *, t=None):
+def source_statistics(make_setup, differentiation_method, sources, *, t=None):
     """``(setup, stats)`` of a list of :class:`~discrepancy.data.chunks.ChunkSource` (e.g.
     one :class:`~discrepancy.data.sources.HDF5Source` per file), one ``dask.delayed`` task
-    each, summed as a tree; the set-up is made from the first source's first
-    ``sample_rows`` rows."""
+    each, summed as a tree; the set-up is made from the first source's first rows (as many
+    as ``differentiation_method`` chooses from)."""
     delayed = require("dask", purpose="fit_sources").delayed
 
     sources = list(sources)
@@ -257,7 +260,7 @@ def source_statistics(make_setup, sample_rows: int, sources, *, t=None):
     if bad:
         raise ParameterError(f"sources[{bad[0]}] must be a ChunkSource (HDF5Source, NPZFiles, "
                              f"...); got {describe(sources[bad[0]])}")
-    setup = source_setup(make_setup, sample_rows, sources[0], step_of(t))
+    setup = source_setup(make_setup, differentiation_method, sources[0], step_of(t))
     step = step_of(t)
     parts = [delayed(_source_stats)(setup, s, step) for s in sources]
     while len(parts) > 1:

@@ -40,6 +40,7 @@ from ..data.chunks import FIELDS, Chunk, ChunkSource, as_source, step_of, valida
 from ..data.trajectory import Trajectory
 from ..errors import ParameterError, ShapeError
 from .accumulate import BLOCK_ROWS, BlockAccumulator
+from .setup import sample_rows
 
 __all__ = ["chunk_statistics", "source_setup", "stream_statistics"]
 
@@ -218,22 +219,23 @@ def _chain(first: list, rest):
     yield from rest
 
 
-def chunk_statistics(make_setup: Callable, sample_rows: int, x, *, t=None, u=None,
+def chunk_statistics(make_setup: Callable, differentiation_method, x, *, t=None, u=None,
                      x_dot=None):
     """``(setup, stats)`` of chunked input ``x`` (see the module docstring).
 
-    ``make_setup(n_states, n_inputs, sample=...)``: the set-up once the first
-    ``sample_rows`` rows are read (a model passes its ``make_setup`` and
-    :func:`~discrepancy.fitting.setup.sample_rows` of its differentiation method)."""
+    ``make_setup(n_states, n_inputs, sample=...)`` gives the set-up (a model passes its
+    own) once the rows that ``differentiation_method`` chooses from are read
+    (:func:`~discrepancy.fitting.setup.sample_rows`)."""
     if u is not None or x_dot is not None:
         raise ParameterError("with chunked x, give u and x_dot inside the chunks "
                              "(Chunk(x, u=..., x_dot=...)), not as separate arguments")
-    return stream_statistics(as_source(x), step_of(t), make_setup, sample_rows=sample_rows)
+    return stream_statistics(as_source(x), step_of(t), make_setup,
+                             sample_rows=sample_rows(differentiation_method))
 
 
-def source_setup(make_setup: Callable, sample_rows: int, source: ChunkSource, step: float):
-    """``make_setup`` from the layout and first ``sample_rows`` rows of ``source`` (read,
-    not fitted)."""
-    sample, _ = _prefetch(source, step, max(sample_rows, 1))
+def source_setup(make_setup: Callable, differentiation_method, source: ChunkSource,
+                 step: float):
+    """``make_setup`` from the layout and first rows of ``source`` (read, not fitted)."""
+    sample, _ = _prefetch(source, step, max(sample_rows(differentiation_method), 1))
     layout = sample[0][0]
     return make_setup(layout.n, layout.r, sample=[_joined(chunks) for _, chunks, _ in sample])

@@ -21,7 +21,7 @@ from ..data.validation import as_float_array, check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
 from ..fitting.distributed import dask_statistics
-from ..fitting.setup import FitSetup, sample_rows
+from ..fitting.setup import FitSetup
 from ..fitting.streaming import chunk_statistics
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
@@ -144,10 +144,12 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
                                  "the model's state_names and input_names")
         if kind != "chunks":  # chunks may carry their own times
             require_t("fit", t, needed=x_dot is None and not self.discrete_time)
-        if kind in ("dask", "chunks"):  # the set-up is made once the first rows are read
-            statistics = dask_statistics if kind == "dask" else chunk_statistics
-            setup, stats = statistics(self.make_setup, sample_rows(self.differentiation_method),
-                                      x, t=t, u=u, x_dot=x_dot)
+        if kind == "dask":  # the set-up is made once the rows its choices need are read
+            setup, stats = dask_statistics(self.make_setup, self.differentiation_method, x, t=t,
+                                           u=u, x_dot=x_dot)
+        elif kind == "chunks":
+            setup, stats = chunk_statistics(self.make_setup, self.differentiation_method, x, t=t,
+                                            u=u, x_dot=x_dot)
         else:
             trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
             first = trajectories[0]
