@@ -16,17 +16,17 @@ from functools import cached_property
 import numpy as np
 
 from ..data.trajectory import Trajectory
-from ..differentiation import Differentiator, WeakForm, get_differentiation_method
+from ..differentiation import Differentiator, get_differentiation_method
 from ..errors import ShapeError
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..optimizers.resampling import Rows
-from ..resources import CHUNKED, SMALLER_LIBRARY, check_memory, n_bytes
+from ..resources import SMALLER_LIBRARY, check_memory, n_bytes
 from ..symbolic import IDENTIFIER
 from .accumulate import BLOCK_ROWS, Names, accumulate, statistics_bytes
-from .discrete import discrete_rows
-from .held_out import GLOBAL_PRE, HeldOutWindows
+from .held_out import HeldOutWindows
 from .prior import Prior
+from .rows import RowForm, row_form
 
 #: cross-validation folds kept in the statistics (contiguous segments dealt out in turn)
 N_FOLDS = 5
@@ -82,59 +82,31 @@ class FitSetup:
         """Number of library columns ``p``."""
         return self.library.n_features_
 
+    @cached_property
+    def form(self) -> RowForm:
+        """How a trajectory becomes rows: pointwise derivatives, the weak form or a map's
+        next sample (:mod:`discrepancy.fitting.rows`)."""
+        return row_form(self.differentiation, discrete_time=self.discrete_time)
+
     def rows(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(z, y, x_dot)`` of one trajectory: what :attr:`transform` turns into the
         regression's rows of Θ (the variables ``[x_smooth, u]`` ``(m, n + r)``), the
         residual ``x_dot - f_m`` ``(m, n)`` and the derivatives ``(m, n)``. In the weak form
         (:class:`~discrepancy.differentiation.WeakForm`) every quantity is integrated against
         each sample's test function instead, and ``z`` is already Θ."""
-        if self.discrete_time:
-            return discrete_rows(self, trajectory)
-        if trajectory.x_dot is None and isinstance(self.differentiation, WeakForm):
-            return self._weak_rows(trajectory)
-        u = trajectory.u
-        if trajectory.x_dot is None:
-            xs, xd = self.differentiation.smooth_and_differentiate(trajectory.x, trajectory.t)
-            kept = self._kept(trajectory)  # ends a method leaves undefined (drop_endpoints)
-            xs, xd, u = xs[kept], xd[kept], None if u is None else u[kept]
-        else:
-            xs, xd = trajectory.x, trajectory.x_dot
-        y = xd - self.prior(xs, u)
-        z = xs if u is None else np.hstack([xs, u])
-        return z, y, xd
-
-    def _kept(self, trajectory: Trajectory) -> slice:
-        """The rows of ``trajectory`` that give regression rows (all but the ends a
-        differentiation method with ``drop_endpoints`` leaves undefined)."""
-        if trajectory.x_dot is not None or self.discrete_time:
-            return slice(None)
-        first, last = self.differentiation.dropped_rows
-        return slice(first, trajectory.n_samples - last)
+        return self.form.rows(self, trajectory)
 
     def row_weights(self, trajectory: Trajectory) -> np.ndarray | None:
         """The sample weights from the first of :meth:`rows`' rows on (``None`` when
         unweighted; a map's last sample, which has no successor, gives no row)."""
         if trajectory.weight is None:
             return None
-        return trajectory.weight[self._kept(trajectory)]
-
-    def _weak_rows(self, trajectory: Trajectory):
-        x, u = trajectory.x, trajectory.u
-        check_memory(f"the weak form's integrals of {len(x)} samples and {self.n_features} "
-                     "columns", 3 * n_bytes((len(x), self.n_features + self.n_states)),
-                     f"Pass the trajectory in pieces: {CHUNKED}")
-        theta = self.library.transform(x if u is None else np.hstack([x, u]))
-        values = np.hstack([theta, self.prior(x, u)])
-        integral, by_parts = self.differentiation.rows(x, trajectory.t, values)
-        p = theta.shape[1]
-        return integral[:, :p], by_parts - integral[:, p:], by_parts
+        return trajectory.weight[self.form.kept(trajectory)]
 
     @property
     def transform(self):
         """Turns the ``z`` of :meth:`rows` into Θ (``transform(z, out=...)``)."""
-        if isinstance(self.differentiation, WeakForm):
-            return copy_into
-        return self.library.transform
+        return self.form.transform(self.library)
 
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m``
@@ -168,18 +140,12 @@ class FitSetup:
         """Empty forecast windows for these statistics' folds (see
         :mod:`discrepancy.fitting.held_out`); ``pre``: the smoothing's halo (none for maps
         and the weak form, whose origins are raw samples)."""
-        if self.discrete_time or isinstance(self.differentiation, WeakForm):
-            pre = 0
-        else:
-            halo = self.differentiation.halo
-            pre = GLOBAL_PRE if halo is None else int(halo)
-        return HeldOutWindows(self.fold_segment, N_FOLDS, pre)
+        return HeldOutWindows(self.fold_segment, N_FOLDS, self.form.pre)
 
     @cached_property
     def names(self):
         """Names of Θ's columns and of the variables, for messages about the data."""
-        variables = [] if isinstance(self.differentiation, WeakForm) else self.variable_names
-        return Names(self.library.get_feature_names(), variables)
+        return Names(self.library.get_feature_names(), self.form.variables(self.variable_names))
 
     def statistics(self, trajectory: Trajectory, *,
                    into: GramStatistics | None = None) -> GramStatistics:
@@ -209,15 +175,6 @@ class FitSetup:
         fold = ((first + np.arange(len(z))) // stats.segment) % stats.n_folds
         rows = Rows(self.transform(z), y, x_dot, weight, fold)
         stats.rows = rows if stats.rows is None else stats.rows + rows
-
-
-def copy_into(theta: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarray:
-    """The ``transform`` of rows that are Θ already (the weak form): ``theta`` itself, or
-    copied into ``out``."""
-    if out is None:
-        return theta
-    out[...] = theta
-    return out
 
 
 def resolve_names(arg: str, given, k: int, stem: str, *, one) -> list[str]:

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..data.fields import FieldRun, Grid
 from ..fitting.accumulate import Names, accumulate, statistics_bytes
-from ..fitting.setup import copy_into
+from ..fitting.rows import copy_into
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from .prior import FieldPrior
