@@ -549,11 +549,11 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         ``prior``: the callable prior, when the state says it was one (code is never
         stored); ``functions``: numpy functions of custom terms, by the names it lists.
         """
-        from .model_file import _fail, decode
+        from .model_file import corrupted, decode
         from .model_parameters import check_parameters
         fields = decode(state, prior=prior, functions=functions)
         given = fields["parameters"]   # empty before version 4: the defaults
-        check_parameters(cls, given, _fail)
+        check_parameters(cls, given, corrupted)
         optimizer = fields["optimizer"]
         if optimizer is None and given.get("optimizer") is not FITTED:
             optimizer = given.get("optimizer")

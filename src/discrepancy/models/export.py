@@ -8,7 +8,7 @@ from ..symbolic import feature_name, symbol
 from ..symbolic import to_casadi as expression_to_casadi
 
 
-def _part(model, part, *, default_hybrid: bool = False):
+def exported_part(model, part, *, default_hybrid: bool = False):
     """Which equations to export. By default the hybrid model when the prior is symbolic
     (or absent), else the discrepancy alone; ``default_hybrid`` makes the default the
     hybrid model always, so a callable prior is refused rather than silently dropped."""
@@ -35,7 +35,7 @@ def discrepancy_expressions(model) -> list[sp.Expr]:
 def to_sympy(model, part=None) -> list[sp.Expr]:
     """The model's right-hand sides as sympy expressions (see
     :meth:`~discrepancy.DiscrepancyModel.to_sympy`)."""
-    part = _part(model, part)
+    part = exported_part(model, part)
     g = discrepancy_expressions(model)
     if part == "discrepancy" or not model.prior_.is_symbolic:
         return g
@@ -69,7 +69,7 @@ def to_casadi(model, part=None):
 
     ca = require("casadi", purpose="to_casadi")
 
-    part = _part(model, part, default_hybrid=True)
+    part = exported_part(model, part, default_hybrid=True)
     x = ca.SX.sym("x", model.n_states_)
     u = ca.SX.sym("u", model.n_inputs_)
     variables = {n: x[i] for i, n in enumerate(model.state_names_)}
@@ -102,8 +102,8 @@ def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
     names = model.get_feature_names()
     std = None
     if uncertainty is not None:
-        from .uncertainty import _check_uncertainty
-        _check_uncertainty(model, uncertainty)
+        from .uncertainty import check_uncertainty
+        check_uncertainty(model, uncertainty)
         std = uncertainty.std
     out = []
     for i, row in enumerate(model.coef_):

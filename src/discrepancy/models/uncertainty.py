@@ -216,7 +216,8 @@ def _resample_fit(model, stats) -> np.ndarray:
     return FoldFits(stats, constraints, 0.0).coefficients(model.coef_ != 0, None)
 
 
-def _check_uncertainty(model, uncertainty) -> None:
+def check_uncertainty(model, uncertainty) -> None:
+    """ParameterError unless ``uncertainty`` is ``model``'s own bootstrap result."""
     if not isinstance(uncertainty, CoefficientUncertainty) or \
             uncertainty.samples.shape[1:] != model.coef_.shape or \
             list(uncertainty.feature_names) != model.get_feature_names() or \
@@ -238,7 +239,7 @@ def quantiles(curves: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]
 
 def predict_interval(model, x, u, uncertainty, level):
     """See :meth:`DiscrepancyModel.predict_interval`."""
-    _check_uncertainty(model, uncertainty)
+    check_uncertainty(model, uncertainty)
     x, u = model._variables(x, u)
     check_memory(f"the {len(uncertainty.samples)} resampled predictions of {len(x)} samples",
                  n_bytes((len(uncertainty.samples), *x.shape)) + n_bytes((len(x),
@@ -258,7 +259,7 @@ def simulate_interval(model, x0, t, u, uncertainty, level, n_draws, seed, **inte
 
     from ..errors import ConvergenceError
 
-    _check_uncertainty(model, uncertainty)
+    check_uncertainty(model, uncertainty)
     validate_params("simulate_interval", {"seed": seed}, {"seed": BOOTSTRAP_CONSTRAINTS["seed"]})
     samples = uncertainty.samples
     if n_draws is not None:

@@ -256,8 +256,8 @@ class PDEDiscrepancyModel(Estimator):
     def equations(self, precision: int = 3) -> list[str]:
         """Right-hand sides as text: ``prior - 1.000 u_xx``."""
         from ..models.export import equations
-        from .export import _ExportView
-        return equations(_ExportView(self), precision)
+        from .export import ExportView
+        return equations(ExportView(self), precision)
 
     def print(self, precision: int = 3) -> None:
         """One line per field, ``(u)_t = prior + 0.050 u_xx``, then how the derivatives were
