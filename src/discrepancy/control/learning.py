@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..data.trajectory import as_trajectories
 from ..errors import ParameterError, describe
 
 
@@ -43,7 +44,6 @@ class DiscrepancyUpdater:
                 :meth:`~.closed_loop.ClosedLoopRun.measured_trajectories` gives them).
             t: time step or times, or a list per trajectory; u: inputs likewise.
         """
-        from ..data.trajectory import as_trajectories
 
         if not hasattr(self.model, "make_setup"):
             raise ParameterError(f"model must be an unfitted DiscrepancyModel; got "

@@ -3,9 +3,12 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .._optional import require
+from ..constraints import Integral, Interval, validate_params
 from ..errors import ExportError, ParameterError
 from ..symbolic import feature_name, symbol
 from ..symbolic import to_casadi as expression_to_casadi
+from .uncertainty import check_uncertainty
 
 
 def exported_part(model, part, *, default_hybrid: bool = False):
@@ -45,7 +48,6 @@ def to_sympy(model, part=None) -> list[sp.Expr]:
 def to_latex(model, precision: int = 4, part=None) -> str:
     """The model's equations as LaTeX (see :meth:`~discrepancy.DiscrepancyModel.to_latex`);
     a map's left-hand sides are ``x[k+1]``, an ODE's ``\\dot{x}``."""
-    from ..constraints import Integral, Interval, validate_params
 
     validate_params("to_latex", {"precision": precision},
                     {"precision": [Interval(Integral, 1, 17)]})
@@ -65,7 +67,6 @@ def to_latex(model, precision: int = 4, part=None) -> str:
 def to_casadi(model, part=None):
     """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms);
     a discrete-time model's output is named ``x_next`` (the map, not a rate)."""
-    from .._optional import require
 
     ca = require("casadi", purpose="to_casadi")
 
@@ -95,14 +96,12 @@ def to_casadi(model, part=None):
 def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
     """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``, one per state;
     with ``uncertainty``, coefficients as ``(0.400 ± 0.004)``."""
-    from ..constraints import Integral, Interval, validate_params
 
     validate_params("equations", {"precision": precision},
                     {"precision": [Interval(Integral, 0, 16)]})
     names = model.get_feature_names()
     std = None
     if uncertainty is not None:
-        from .uncertainty import check_uncertainty
         check_uncertainty(model, uncertainty)
         std = uncertainty.std
     out = []

@@ -21,10 +21,14 @@ import sympy as sp
 
 from .._version import __version__
 from ..data.containers import as_path
+from ..differentiation.base import METHODS
 from ..errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
+from ..libraries import CustomLibrary
+from ..optimizers.base import OPTIMIZERS
 from ..resources import check_features
 from ..symbolic import IDENTIFIER, from_data, to_data
 from .model_parameters import decode_parameters, encode_parameters
+from .region import FittedRegion
 
 _NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
 FORMAT = "discrepancy-model"
@@ -48,8 +52,6 @@ MAX_BYTES = 20 * 2**20
 # ------------------------------------------------------------------------ writing
 def encode(model) -> dict:
     """The model file's content for a fitted model."""
-    from ..differentiation.base import METHODS
-    from ..optimizers.base import OPTIMIZERS
 
     if model.prior is None:
         prior = None
@@ -150,7 +152,6 @@ def decode(doc, *, prior=None, functions=None) -> dict:
     coefficients ``(n, p)``, the library of stored terms, optimizer and differentiation
     method, the prior (the given callable, or the stored sympy expressions) and, from
     version 4, the constructor's ``parameters`` as given (see :mod:`.model_parameters`)."""
-    from ..libraries import CustomLibrary
 
     version = _version(doc)
     choice = _fit_record(doc["fit"], version) if version >= 2 else None
@@ -197,7 +198,6 @@ def _fit_record(fit, version: int) -> dict | None:
 
 def _region(doc, version: int, names):
     """The fitted region (None before version 3 or when none was recorded)."""
-    from .region import FittedRegion
 
     if version < 3 or doc["region"] is None:
         return None
@@ -310,8 +310,6 @@ def _prior(stored, states, allowed, given):
 
 def _component(doc, key, version):
     """A stored optimizer / differentiation method rebuilt through its registry."""
-    from ..differentiation.base import METHODS
-    from ..optimizers.base import OPTIMIZERS
 
     if version < 2 or doc[key] is None:
         return None

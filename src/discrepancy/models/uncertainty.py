@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constraints import InstanceOf, Integral, Interval, Options, validate_params
-from ..errors import ParameterError
+from ..errors import ConvergenceError, ParameterError
 from ..optimizers import GramStatistics
 from ..optimizers.resampling import from_blocks
 from ..resources import check_memory, n_bytes
@@ -257,7 +257,6 @@ def simulate_interval(model, x0, t, u, uncertainty, level, n_draws, seed, **inte
 
     from tqdm.auto import tqdm
 
-    from ..errors import ConvergenceError
 
     check_uncertainty(model, uncertainty)
     validate_params("simulate_interval", {"seed": seed}, {"seed": BOOTSTRAP_CONSTRAINTS["seed"]})

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from ..constraints import Integral, Interval, validate_params
 from ..libraries.pde import parse_derivative
 from ..models.export import discrepancy_expressions, exported_part
 from ..symbolic import symbol
@@ -71,7 +72,6 @@ def to_latex(model, precision: int = 4, part=None) -> str:
     per field with floats rounded to ``precision`` significant digits (see
     :meth:`~discrepancy.PDEDiscrepancyModel.to_latex`); a discrepancy alone is written
     ``\delta u_t``."""
-    from ..constraints import Integral, Interval, validate_params
 
     validate_params("to_latex", {"precision": precision},
                     {"precision": [Interval(Integral, 1, 17)]})

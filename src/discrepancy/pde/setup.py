@@ -19,9 +19,10 @@ from ..fitting.accumulate import Names, accumulate, statistics_bytes
 from ..fitting.rows import copy_into
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
+from ..resources import SMALLER_LIBRARY, check_memory
 from .prior import FieldPrior
 from .variables import FieldVariables
-from .weak import FieldWeakForm, WeakPlan, weak_rows
+from .weak import FieldWeakForm, WeakPlan, centres, weak_rows
 
 #: most cross-validation segments kept (each holds its own Gram statistics)
 MAX_SEGMENTS = 40
@@ -114,7 +115,6 @@ class FieldSetup:
         the test-function centres on the grid in the weak form."""
         if self.weak is None:
             return self.grid.size
-        from .weak import centres
 
         widths = [int(w) for w in self.weak.widths[1:]]
         strides = self.weak.strides(self.grid)
@@ -173,7 +173,6 @@ class FieldSetup:
     def new_statistics(self) -> GramStatistics:
         """Empty statistics kept per segment of :attr:`segment_snapshots` snapshots (the
         purged cross-validation's blocks, :mod:`discrepancy.pde.solve`)."""
-        from ..resources import SMALLER_LIBRARY, check_memory
 
         p, n = self.n_features, self.n_fields
         segments = max(1, -(-self.probe_snapshots // self.segment_snapshots))
