@@ -18,9 +18,9 @@ from _common import DT, lorenz, lorenz_trajectories, machine, median_time, same,
 from threadpoolctl import threadpool_limits
 
 import discrepancy as dc
-import discrepancy.accumulate as accumulate_module
-from discrepancy.accumulate import BLOCK_ROWS, _single_threaded_blas, default_threads
+import discrepancy.fitting.accumulate as accumulate_module
 from discrepancy.data.trajectory import as_trajectories
+from discrepancy.fitting.accumulate import BLOCK_ROWS, _single_threaded_blas, default_threads
 
 warnings.filterwarnings("ignore")
 

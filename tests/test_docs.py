@@ -32,7 +32,7 @@ def test_other_paths_resolve_to_the_one_page(catalogue):
         assert documented(catalogue, path) == "discrepancy.DiscrepancyModel"
     assert documented(catalogue, "discrepancy.models.discrepancy_model.DiscrepancyModel.fit") \
         == "discrepancy.DiscrepancyModel.fit"
-    assert documented(catalogue, "discrepancy.models.setup.FitSetup") == \
+    assert documented(catalogue, "discrepancy.fitting.setup.FitSetup") == \
         "discrepancy.models.FitSetup"
     assert documented(catalogue, "discrepancy.no_such_name") is None
 

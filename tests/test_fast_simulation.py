@@ -7,7 +7,7 @@ from scipy.integrate import solve_ivp
 
 import discrepancy as dc
 from discrepancy.errors import SimulationError
-from discrepancy.models.inputs import stage_inputs, upsample_bandlimited
+from discrepancy.hybrid.inputs import stage_inputs, upsample_bandlimited
 
 DT = 0.05
 FREQS = np.array([0.37, 1.1, 2.3, 4.1])      # Hz, all below the Nyquist frequency of 10 Hz

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import discrepancy as dc
+from discrepancy.fitting.held_out import Window
 from discrepancy.selection.forecast import forecast_scores, prepare
-from discrepancy.selection.held_out import Window
 from discrepancy.selection.horizon import choose_steps
 
 

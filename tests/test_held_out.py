@@ -2,7 +2,7 @@
 arrival (whole, in chunks, merged), against indices computed by hand."""
 import numpy as np
 
-from discrepancy.selection.held_out import HeldOutWindows
+from discrepancy.fitting.held_out import HeldOutWindows
 
 
 def feed(held, pieces, first_row=0):

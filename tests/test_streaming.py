@@ -6,8 +6,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import discrepancy as dc
-from discrepancy.accumulate import BLOCK_ROWS, accumulate
 from discrepancy.errors import DataError, ParameterError, ShapeError
+from discrepancy.fitting.accumulate import BLOCK_ROWS, accumulate
 from discrepancy.streaming import Chunk
 
 DT = 1e-3

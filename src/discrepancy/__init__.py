@@ -41,7 +41,7 @@ from .optimizers import (
     PriorOnly,
 )
 from .pde import FieldSource, FieldWeakForm, PDEDiscrepancyModel
-from .selection import choose_procedure
+from .procedures import choose_procedure
 
 __all__ = [
     "AutoSmoothing", "CSVFiles", "Chunk", "ConstrainedSR3", "Constraints", "CustomLibrary",

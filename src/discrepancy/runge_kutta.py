@@ -9,7 +9,7 @@ filters move a state, its Jacobian and its noise together).
 
 The input of a stage is whatever ``rates`` takes as its second argument: the input at the
 step's start, middle and end (``u0``, ``um``, ``u1``, the stage times of the samples'
-interpolation, see :func:`discrepancy.models.inputs.stage_inputs`), the same value three
+interpolation, see :func:`discrepancy.hybrid.inputs.stage_inputs`), the same value three
 times for a held input, stage indices, or ``(time, input)`` pairs. Written out because
 scipy has no fixed-step RK4 and the CasADi graphs need the same formula on symbols.
 """

@@ -1,7 +1,7 @@
 """Learning between attempts: attempt, record, update the discrepancy, plan again.
 
 A fit is a function of Gram statistics, which are sums over samples
-(:class:`~discrepancy.models.setup.FitSetup`), so learning from one more attempt is adding
+(:class:`~discrepancy.fitting.setup.FitSetup`), so learning from one more attempt is adding
 that attempt's statistics to the running sum and refitting: the model after ``k`` attempts
 is exactly the model fitted to all ``k`` logs at once, without keeping the logs.
 """
@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constraints import Integral, Interval, check_argument
+from ..data.trajectory import as_trajectories
 from ..errors import ParameterError, describe
 
 
@@ -27,7 +28,7 @@ class DiscrepancyUpdater:
             log's statistics are made the same way.
 
     Attributes:
-        setup_: the frozen :class:`~discrepancy.models.setup.FitSetup` (after the first
+        setup_: the frozen :class:`~discrepancy.fitting.setup.FitSetup` (after the first
             :meth:`update`).
         statistics_: the summed Gram statistics.
         models_: the model after each update.
@@ -44,7 +45,6 @@ class DiscrepancyUpdater:
                 :meth:`~.closed_loop.ClosedLoopRun.measured_trajectories` gives them).
             t: time step or times, or a list per trajectory; u: inputs likewise.
         """
-        from ..data.trajectory import as_trajectories
 
         if not hasattr(self.model, "make_setup"):
             raise ParameterError(f"model must be an unfitted DiscrepancyModel; got "

@@ -37,7 +37,7 @@ from ..errors import ParameterError, ShapeError
 from .dynamics import as_casadi, rk4_step
 from .limits import Limits
 from .rti import RealTimeIteration
-from .tracking import _diag, tvlqr
+from .tracking import tvlqr, weight_matrix
 from .trajectory import Plan
 
 #: solvers and their default iterations per sample
@@ -91,7 +91,8 @@ class MPC:
         horizon, substeps = int(horizon), int(substeps)
         max_iter = SOLVERS[solver] if max_iter is None else int(max_iter)
         self.n, self.r, self.dt, self.horizon = n, r, float(dt), horizon
-        self.Q, self.R = _diag("Q", np.ones(n) if Q is None else Q, n), _diag("R", R, r)
+        self.Q = weight_matrix("Q", np.ones(n) if Q is None else Q, n)
+        self.R = weight_matrix("R", R, r)
         self.limits = Limits() if limits is None else limits
         self.substeps, self.max_iter, self.solver = substeps, max_iter, solver
         self.soft_penalty = float(soft_penalty)

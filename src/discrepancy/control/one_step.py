@@ -26,7 +26,7 @@ class OneStepFit:
     """The fixed-point fit for a model's set-up.
 
     Args:
-        setup: the model's frozen :class:`~discrepancy.models.setup.FitSetup`.
+        setup: the model's frozen :class:`~discrepancy.fitting.setup.FitSetup`.
         template: the unfitted model whose ``fit_statistics`` chooses the terms.
         substeps: RK4 steps per interval; max_sweeps: most fixed-point iterations.
     """
@@ -93,7 +93,7 @@ def _refit(stats, support) -> np.ndarray:
 def _flow_functions(setup, substeps: int):
     """CasADi ``flow(x, u, vec(Ξ), dt)`` (the hybrid model's held-input RK4 step with
     coefficients ``Ξ``) and ``theta(x, u)`` (the library's columns), for one sample each."""
-    from ..models.casadi_form import library_columns, prior_expression
+    from ..hybrid.casadi_form import library_columns, prior_expression
 
     n, r, p = setup.n_states, setup.n_inputs, setup.n_features
     x, u = ca.SX.sym("x", n), ca.SX.sym("u", r)

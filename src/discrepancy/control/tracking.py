@@ -51,7 +51,7 @@ class Tracker:
         return u
 
 
-def _diag(name, w, size):
+def weight_matrix(name, w, size):
     """A weight as a ``(size, size)`` matrix: finite, symmetric and positive semidefinite
     (a negative weight would reward the error it should penalise), checked by name."""
     try:
@@ -106,7 +106,7 @@ def stationary_lqr(model, x_eq, u_eq, *, dt: float, substeps: int, Q, R):
     stabilising solution there (e.g. not an equilibrium one can stabilise). ``Q``, ``R``:
     weights as :class:`~.mpc.MPC` takes them (numbers, diagonals or matrices, >= 0)."""
     A, B = (np.array(m) for m in step_jacobians(model, dt, substeps)(x_eq, u_eq))
-    Q, R = _diag("Q", Q, A.shape[0]), _diag("R", R, B.shape[1])
+    Q, R = weight_matrix("Q", Q, A.shape[0]), weight_matrix("R", R, B.shape[1])
     try:
         P = solve_discrete_are(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError):
@@ -132,7 +132,7 @@ def tvlqr(model, plan: Plan, *, Q=None, R=1.0, Q_final=None, u_bounds=None,
     """
     A, B = linearise(model, plan)
     n, r = A.shape[1], B.shape[2]
-    Qm, Rm = _diag("Q", np.ones(n) if Q is None else Q, n), _diag("R", R, r)
+    Qm, Rm = weight_matrix("Q", np.ones(n) if Q is None else Q, n), weight_matrix("R", R, r)
     uf = np.zeros(r) if u_final is None else np.asarray(u_final, dtype=float).reshape(r)
     K_inf, P_inf = stationary_lqr(model, plan.x[-1], uf, dt=plan.dt, substeps=plan.substeps,
                                   Q=Qm, R=Rm)
@@ -145,7 +145,7 @@ def tvlqr(model, plan: Plan, *, Q=None, R=1.0, Q_final=None, u_bounds=None,
                                   "solution")
         P = P_inf
     else:
-        P = 100.0 * Qm if Q_final is None else _diag("Q_final", Q_final, n)
+        P = 100.0 * Qm if Q_final is None else weight_matrix("Q_final", Q_final, n)
     gains = np.zeros((len(A), r, n))
     costs = np.zeros((len(A) + 1, n, n))
     costs[-1] = P

@@ -152,7 +152,7 @@ def _validate(chunk: Chunk, layout: _Layout, offset: int, step: float, t_last) -
     return Chunk(x, t, u, xd, w, chunk.where)
 
 
-def _validated(items: Iterable, traj: int, step: float, layout: _Layout | None):
+def validated_chunks(items: Iterable, traj: int, step: float, layout: _Layout | None):
     """Yield validated chunks of trajectory ``traj`` (creating the layout from the first)."""
     offset, t_last = 0, None
     for i, item in enumerate(items):
@@ -181,7 +181,7 @@ def _validated(items: Iterable, traj: int, step: float, layout: _Layout | None):
 def peek_layout(source: ChunkSource) -> tuple[int, int]:
     """``(n_states, n_inputs)`` from the first chunk of ``source``."""
     for k, items in enumerate(source.trajectories()):
-        for layout, _ in _validated(items, k, 1.0, None):
+        for layout, _ in validated_chunks(items, k, 1.0, None):
             return layout.n, layout.r
     raise ShapeError("x holds no rows")
 

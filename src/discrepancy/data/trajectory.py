@@ -51,7 +51,9 @@ def as_times(name: str, t, m: int) -> np.ndarray:
     return check_times(name, t, m)
 
 
-def _as_list(name: str, value, k: int, *, broadcast: bool):
+def one_per_trajectory(name: str, value, k: int, *, broadcast: bool):
+    """``value`` as a list of ``k`` items, one per trajectory: a list or tuple of that
+    length as given, or (``broadcast``) one value repeated; ShapeError otherwise."""
     if isinstance(value, (list, tuple)):
         if len(value) != k:
             raise ShapeError(f"{name} must be a list of {k} items (one per trajectory of x); "
@@ -88,11 +90,11 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
         raise ShapeError(f"{x_name} must hold at least one trajectory; got an empty list")
     k = len(xs)
     if several:
-        ts = _as_list("t", 1.0 if t is None else t, k,
+        ts = one_per_trajectory("t", 1.0 if t is None else t, k,
                       broadcast=not isinstance(t, (list, tuple)) and np.ndim(t) == 0)
-        us = _as_list("u", u, k, broadcast=u is None)
-        xds = _as_list("x_dot", x_dot, k, broadcast=x_dot is None)
-        ws = _as_list("sample_weight", sample_weight, k, broadcast=sample_weight is None)
+        us = one_per_trajectory("u", u, k, broadcast=u is None)
+        xds = one_per_trajectory("x_dot", x_dot, k, broadcast=x_dot is None)
+        ws = one_per_trajectory("sample_weight", sample_weight, k, broadcast=sample_weight is None)
     else:
         ts, us, xds, ws = [1.0 if t is None else t], [u], [x_dot], [sample_weight]
     out, n, r = [], None, None

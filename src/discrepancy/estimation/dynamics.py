@@ -17,6 +17,7 @@ import numpy as np
 import sympy as sp
 
 from .._optional import require
+from ..data.validation import check_vector
 from ..errors import (
     ExportError,
     MissingDependencyError,
@@ -24,8 +25,9 @@ from ..errors import (
     ShapeError,
     describe,
 )
-from ..models.prior import Prior
-from ..models.setup import resolve_names
+from ..fitting.prior import Prior
+from ..fitting.setup import resolve_names
+from ..hybrid.casadi_form import _casadi, hybrid_function, prior_expression
 
 BACKENDS = ("auto", "casadi", "numpy")
 
@@ -153,16 +155,12 @@ def check_points(n: int, r: int):
 
 
 def _model_function(model):
-    from ..models.casadi_form import _casadi, hybrid_function
-
     ca = _casadi()
     f = hybrid_function(model, check_points=check_points(model.n_states_, model.n_inputs_))
     return _parametrised(ca, f, model.n_states_, model.n_inputs_)
 
 
 def _prior_function(prior: Prior):
-    from ..models.casadi_form import _casadi, prior_expression
-
     ca = _casadi()
     n, r = prior.n, len(prior.names) - prior.n
     x, u = ca.SX.sym("x", n), ca.SX.sym("u", r)
@@ -178,7 +176,6 @@ def _parametrised(ca, f, n: int, r: int):
 
 def check_state(name: str, value, n: int) -> np.ndarray:
     """A state ``(n,)`` of finite numbers."""
-    from ..data.validation import check_vector
 
     arr = np.asarray(value, dtype=float) if isinstance(value, np.ndarray) else value
     try:

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..constraints import Integral, Interval, Real, validate_params
 from ..errors import ConvergenceError, DataError, ShapeError
-from ..models.inputs import check_hold
+from ..hybrid.inputs import check_hold
 from . import kalman_math as km
 from .backends import NumpyOps
 from .disturbances import with_disturbances

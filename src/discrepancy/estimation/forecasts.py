@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.casadi_form import _casadi, rk4_step
+from ..hybrid.casadi_form import _casadi, rk4_step
 
 #: origins per compiled call
 ORIGINS = 256

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..models.casadi_form import _casadi, library_columns, prior_expression
+from ..hybrid.casadi_form import _casadi, library_columns, prior_expression
 from .backends import CasadiOps
 from .compiled import BLOCK, flat_update, layout, run_blocks, step_expressions
 from .disturbances import augment_casadi

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.outputs import OutputMap
+from ..hybrid.outputs import OutputMap
 from ..symbolic import to_casadi
 from .backends import FD_STEP
 

@@ -134,7 +134,7 @@ def _problem(setup, measurement, equations, data, process_noise, measurement_noi
              x0, u_hold, substeps) -> PredictionErrorProblem:
     from types import SimpleNamespace
 
-    from ..models.inputs import check_hold
+    from ..hybrid.inputs import check_hold
 
     names = [*setup.state_names, *disturbance_names(list(setup.state_names), equations)]
     N, k = len(names), measurement.k

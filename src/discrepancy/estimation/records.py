@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..data.trajectory import _as_list
+from ..data.trajectory import one_per_trajectory
 from ..data.validation import as_float_array, check_array, check_times
 from ..errors import ConvergenceError, DataError, ShapeError
-from ..models.casadi_form import stage_columns
-from ..models.inputs import stage_inputs
+from ..hybrid.casadi_form import stage_columns
+from ..hybrid.inputs import stage_inputs
 from ..resources import check_memory, n_bytes
 from .dynamics import check_state
 from .noise import initial_covariance
@@ -26,8 +26,9 @@ def record_inputs(y, t, u) -> tuple[list, list, list]:
     if not y:
         raise ShapeError("y must hold at least one record; got an empty list")
     k = len(y)
-    ts = _as_list("t", t, k, broadcast=not isinstance(t, (list, tuple)) and np.ndim(t) == 0)
-    return list(y), ts, _as_list("u", u, k, broadcast=u is None)
+    ts = one_per_trajectory("t", t, k,
+                            broadcast=not isinstance(t, (list, tuple)) and np.ndim(t) == 0)
+    return list(y), ts, one_per_trajectory("u", u, k, broadcast=u is None)
 
 
 class FilterRecord:

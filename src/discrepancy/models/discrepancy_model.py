@@ -20,6 +20,9 @@ from ..data.trajectory import Trajectory, as_2d, as_trajectories, is_number
 from ..data.validation import as_float_array, check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
+from ..fitting.distributed import dask_statistics
+from ..fitting.setup import FitSetup
+from ..fitting.streaming import chunk_statistics
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..optimizers.wrapped import REGRESSOR
@@ -27,14 +30,23 @@ from ..symbolic import compile_numpy, feature_name
 from .arguments import keywords_only, require_t
 from .checks import checked_discrepancy, pairs
 from .conditioning import warn_if_ill_conditioned
-from .model_parameters import FITTED
+from .discrete import iterate
+from .export import choice_line, equations, to_casadi, to_latex, to_sympy
+from .fast_simulation import compiled_stepper
+from .model_file import corrupted, decode, encode, read_json, write_json
+from .model_parameters import FITTED, check_parameters
 from .output_methods import OutputErrorMethods
+from .prediction import checked_states, iterate_ahead, predict_ahead
 from .prediction_error_methods import PredictionErrorMethods
 from .pysindy_interface import PySINDyInterface
-from .region import guard, guard_run
-from .setup import FitSetup, resolve_setup
+from .region import guard, guard_run, region_of
+from .resolve import resolve_setup
+from .scoring import score
+from .simulate_arguments import map_options, simulation_options
 from .simulation import integrate
+from .term_choice import announce, choose_terms
 from .term_constraints import Constraints
+from .uncertainty import bootstrap, predict_interval, simulate_interval
 
 _SPEC = InstanceOf(str, "a spec string")
 _NAMES = [None, InstanceOf(str, "a name"),
@@ -141,12 +153,12 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
                                  "the model's state_names and input_names")
         if kind != "chunks":  # chunks may carry their own times
             require_t("fit", t, needed=x_dot is None and not self.discrete_time)
-        if kind == "dask":
-            from ..distributed import dask_statistics
-            setup, stats = dask_statistics(self, x, t=t, u=u, x_dot=x_dot)
+        if kind == "dask":  # the set-up is made once the rows its choices need are read
+            setup, stats = dask_statistics(self.make_setup, self.differentiation_method, x, t=t,
+                                           u=u, x_dot=x_dot)
         elif kind == "chunks":
-            from ..streaming import chunk_statistics
-            setup, stats = chunk_statistics(self, x, t=t, u=u, x_dot=x_dot)
+            setup, stats = chunk_statistics(self.make_setup, self.differentiation_method, x, t=t,
+                                            u=u, x_dot=x_dot)
         else:
             trajectories = as_trajectories(x, t, u, x_dot, sample_weight)
             first = trajectories[0]
@@ -201,8 +213,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         if not np.any(stats.gram):
             raise DataError("the statistics are all zero: every sample has weight 0 or every "
                             "library column is 0 on these data; nothing to fit")
-        from .region import region_of
-        from .term_choice import announce, choose_terms
 
         optimizer = copy.deepcopy(setup.optimizer)
         optimizer.fit_statistics(stats)
@@ -317,7 +327,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         """Trajectory of the hybrid model from ``x0`` ``(n,)`` at times ``t`` ``(k,)``.
 
         ``u`` is an array ``(k, r)`` sampled at ``t`` (between samples ``u_hold="linear"``,
-        ``"zoh"`` or ``"bandlimited"``, see :mod:`discrepancy.models.inputs`) or a callable
+        ``"zoh"`` or ``"bandlimited"``, see :mod:`discrepancy.hybrid.inputs`) or a callable
         ``u(t) -> (r,)``. Keyword arguments go to
         :func:`discrepancy.models.simulation.integrate` (``method``, ``rtol``, ``atol``,
         ``substeps``, ``max_evaluations``); a model with a discontinuous term (``sign``) is
@@ -338,12 +348,10 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         self._sync()
         x0 = check_vector("x0", x0, self.n_states_)
         validate_params("simulate", {"compiled": compiled}, {"compiled": [bool]})
-        from .simulate_arguments import map_options, simulation_options
 
         pysindy = dict(integrator=integrator, integrator_kws=integrator_kws,
                        interpolator=interpolator, interpolator_kws=interpolator_kws)
         if self.discrete_time:
-            from .discrete import iterate
             states = iterate(self._rhs_one, x0, t, u, self.n_states_, self.n_inputs_,
                              stop_condition=map_options(stop_condition, pysindy, options))
             guard_run(self, states, u, "simulate")
@@ -352,7 +360,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         if "method" not in integrator_kws and self._has_jumps():
             integrator_kws["method"] = "rk4"  # adaptive steps would chatter at the jumps
         if integrator_kws.get("method") == "rk4" and compiled and not callable(u):
-            from .fast_simulation import compiled_stepper
             integrator_kws["compiled"] = compiled_stepper(self, x0, u,
                                                           integrator_kws.get("substeps", 4))
         states = integrate(self._rhs_one, x0, t, u, n_states=self.n_states_,
@@ -370,7 +377,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         keywords_only("predict_ahead", args, "u and the options")
         self.check_is_fitted()
         self._sync()
-        from .prediction import checked_states, iterate_ahead, predict_ahead
 
         x = checked_states(self, x, u)
         if self.discrete_time:
@@ -416,7 +422,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``; with
         ``uncertainty`` (:meth:`bootstrap`) each coefficient as ``0.400 ± 0.004`` (one
         bootstrap standard deviation)."""
-        from .export import equations
         return equations(self, precision, uncertainty)
 
     def print(self, precision: int = 3, *, lhs=None, uncertainty=None) -> None:
@@ -435,7 +440,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
                                  f"state); got {describe(lhs)}")
         for name, eq in zip(lhs, lines, strict=True):
             print(f"{name} = {eq}")
-        from .export import choice_line
         line = choice_line(self)
         if line:
             print(line)
@@ -448,7 +452,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         given (or the model is discrete-time). ``metric_kws`` go to the metric, as in
         PySINDy (with ``"r2"``: to ``sklearn.metrics.r2_score``, e.g.
         ``multioutput="raw_values"``)."""
-        from .scoring import score
         keywords_only("score", args, "u, x_dot and metric")
         self.check_is_fitted()
         self._sync()
@@ -467,7 +470,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         Returns a :class:`~discrepancy.models.uncertainty.CoefficientUncertainty` with
         ``std``, ``interval()``, ``inclusion_probability`` and a printable ``table()``.
         """
-        from .uncertainty import bootstrap
         keywords_only("bootstrap", args, "u, x_dot and the options")
         require_t("bootstrap", t, needed=x_dot is None and not self.discrete_time)
         return bootstrap(self, x, t, u, x_dot, n_resamples=n_resamples,
@@ -478,7 +480,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         """Pointwise ``level`` band ``(low, high)``, each ``(m, n)``, of the hybrid
         derivatives ``f_m + g`` over the bootstrap's resampled coefficients
         (``uncertainty`` = :meth:`bootstrap` of this model)."""
-        from .uncertainty import predict_interval
         return predict_interval(self, x, u, uncertainty, level)
 
     def simulate_interval(self, x0, t, *args, u=None, uncertainty, level: float = 0.95,
@@ -487,7 +488,6 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         simulated with ``n_draws`` of the bootstrap's resampled models (all with ``None``).
         It holds the coefficients' uncertainty, not the measurement noise. Resampled models
         that diverge are left out, with a warning."""
-        from .uncertainty import simulate_interval
         keywords_only("simulate_interval", args, "u and the options")
         self.check_is_fitted()
         return simulate_interval(self, x0, t, u, uncertainty, level, n_draws, seed,
@@ -514,12 +514,10 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         ``"discrepancy"`` gives ``g`` alone. The default is the hybrid model when the
         prior is symbolic or absent, and the discrepancy when it is a Python callable.
         """
-        from .export import to_sympy
         return to_sympy(self, part)
 
     def to_latex(self, precision: int = 4, part: str | None = None) -> str:
         """LaTeX ``aligned`` block of the equations, coefficients rounded to ``precision``."""
-        from .export import to_latex
         return to_latex(self, precision, part)
 
     def to_casadi(self, part: str | None = None):
@@ -529,13 +527,11 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         The default is the whole hybrid model, which needs a sympy prior: a callable
         prior raises ExportError (ask for ``part="discrepancy"`` to get ``g`` alone).
         """
-        from .export import to_casadi
         return to_casadi(self, part)
 
     # ------------------------------------------------------------------- files
     def to_state(self) -> dict:
         """The fitted model as a JSON-compatible dict (the model file's content)."""
-        from .model_file import encode
         self.check_is_fitted()
         return encode(self)
 
@@ -546,11 +542,9 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         ``prior``: the callable prior, when the state says it was one (code is never
         stored); ``functions``: numpy functions of custom terms, by the names it lists.
         """
-        from .model_file import _fail, decode
-        from .model_parameters import check_parameters
         fields = decode(state, prior=prior, functions=functions)
         given = fields["parameters"]   # empty before version 4: the defaults
-        check_parameters(cls, given, _fail)
+        check_parameters(cls, given, corrupted)
         optimizer = fields["optimizer"]
         if optimizer is None and given.get("optimizer") is not FITTED:
             optimizer = given.get("optimizer")
@@ -595,12 +589,10 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
     def save(self, path) -> None:
         """Write the fitted model as versioned JSON (atomically: a failed write never
         destroys an existing file)."""
-        from .model_file import write_json
         write_json(path, self.to_state())
 
 
 def load_model(path, prior=None, *, functions=None) -> DiscrepancyModel:
     """Load a model saved with :meth:`DiscrepancyModel.save` (see
     :meth:`~DiscrepancyModel.from_state` for ``prior`` and ``functions``)."""
-    from .model_file import read_json
     return DiscrepancyModel.from_state(read_json(path), prior=prior, functions=functions)

@@ -3,13 +3,15 @@ from __future__ import annotations
 
 import sympy as sp
 
-from ..constraints import Options, check_argument
+from .._optional import require
+from ..constraints import Integral, Interval, Options, check_argument, validate_params
 from ..errors import ExportError
 from ..symbolic import feature_name, symbol
 from ..symbolic import to_casadi as expression_to_casadi
+from .uncertainty import check_uncertainty
 
 
-def _part(model, part, *, default_hybrid: bool = False):
+def exported_part(model, part, *, default_hybrid: bool = False):
     """Which equations to export. By default the hybrid model when the prior is symbolic
     (or absent), else the discrepancy alone; ``default_hybrid`` makes the default the
     hybrid model always, so a callable prior is refused rather than silently dropped."""
@@ -35,7 +37,7 @@ def discrepancy_expressions(model) -> list[sp.Expr]:
 def to_sympy(model, part=None) -> list[sp.Expr]:
     """The model's right-hand sides as sympy expressions (see
     :meth:`~discrepancy.DiscrepancyModel.to_sympy`)."""
-    part = _part(model, part)
+    part = exported_part(model, part)
     g = discrepancy_expressions(model)
     if part == "discrepancy" or not model.prior_.is_symbolic:
         return g
@@ -45,7 +47,6 @@ def to_sympy(model, part=None) -> list[sp.Expr]:
 def to_latex(model, precision: int = 4, part=None) -> str:
     """The model's equations as LaTeX (see :meth:`~discrepancy.DiscrepancyModel.to_latex`);
     a map's left-hand sides are ``x[k+1]``, an ODE's ``\\dot{x}``."""
-    from ..constraints import Integral, Interval, validate_params
 
     validate_params("to_latex", {"precision": precision},
                     {"precision": [Interval(Integral, 1, 17)]})
@@ -65,11 +66,10 @@ def to_latex(model, precision: int = 4, part=None) -> str:
 def to_casadi(model, part=None):
     """CasADi Function ``f(x, u) -> xdot`` built from the sympy form (only active terms);
     a discrete-time model's output is named ``x_next`` (the map, not a rate)."""
-    from .._optional import require
 
     ca = require("casadi", purpose="to_casadi")
 
-    part = _part(model, part, default_hybrid=True)
+    part = exported_part(model, part, default_hybrid=True)
     x = ca.SX.sym("x", model.n_states_)
     u = ca.SX.sym("u", model.n_inputs_)
     variables = {n: x[i] for i, n in enumerate(model.state_names_)}
@@ -95,15 +95,13 @@ def to_casadi(model, part=None):
 def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
     """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``, one per state;
     with ``uncertainty``, coefficients as ``(0.400 ± 0.004)``."""
-    from ..constraints import Integral, Interval, validate_params
 
     validate_params("equations", {"precision": precision},
                     {"precision": [Interval(Integral, 0, 16)]})
     names = model.get_feature_names()
     std = None
     if uncertainty is not None:
-        from .uncertainty import _check_uncertainty
-        _check_uncertainty(model, uncertainty)
+        check_uncertainty(model, uncertainty)
         std = uncertainty.std
     out = []
     for i, row in enumerate(model.coef_):

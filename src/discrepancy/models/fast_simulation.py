@@ -3,7 +3,7 @@
 Stepping a small model in Python costs tens of microseconds per right-hand-side call, so a
 long record with a measured input (1e5 samples, four RK4 stages, a few substeps) takes
 tens of seconds. Here the model is turned into CasADi expressions once
-(:mod:`discrepancy.models.casadi_form`), one step of RK4 with the input at its stage times
+(:mod:`discrepancy.hybrid.casadi_form`), one step of RK4 with the input at its stage times
 becomes a CasADi Function, and ``mapaccum`` runs all steps in CasADi's virtual machine:
 the same arithmetic as the Python stepper (equal to rounding), about a hundred times
 faster. Written here because no library we use compiles a model given as sympy terms plus
@@ -15,7 +15,7 @@ import numpy as np
 
 from .._optional import missing
 from ..errors import ExportError
-from .casadi_form import chained_step, hybrid_function, rk4_step, rk4_substep, stage_columns
+from ..hybrid.casadi_form import chained_step, hybrid_function, rk4_step, rk4_substep, stage_columns
 
 #: steps per compiled call (building CasADi's map costs time in proportion to its length,
 #: so one map of this length is built once and called block after block); with many

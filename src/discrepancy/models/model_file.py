@@ -21,10 +21,14 @@ import sympy as sp
 
 from .._version import __version__
 from ..data.containers import as_path
+from ..differentiation.base import METHODS
 from ..errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
+from ..libraries import CustomLibrary
+from ..optimizers.base import OPTIMIZERS
 from ..resources import check_features
 from ..symbolic import IDENTIFIER, from_data, to_data
 from .model_parameters import decode_parameters, encode_parameters
+from .region import FittedRegion
 
 _NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
 FORMAT = "discrepancy-model"
@@ -48,8 +52,6 @@ MAX_BYTES = 20 * 2**20
 # ------------------------------------------------------------------------ writing
 def encode(model) -> dict:
     """The model file's content for a fitted model."""
-    from ..differentiation.base import METHODS
-    from ..optimizers.base import OPTIMIZERS
 
     if model.prior is None:
         prior = None
@@ -115,7 +117,8 @@ def write_json(path, doc: dict) -> None:
 
 
 # ------------------------------------------------------------------------ reading
-def _fail(why: str) -> ModelFileError:
+def corrupted(why: str) -> ModelFileError:
+    """The error for a model file that cannot be read, saying ``why``."""
     return ModelFileError(f"model file: {why}; it is corrupted, was edited, or is not a "
                           f"{FORMAT} file")
 
@@ -128,20 +131,20 @@ def read_json(path) -> dict:
     if not path.is_file():
         raise MissingFileError(f"model file {str(path)!r} does not exist")
     if path.stat().st_size > MAX_BYTES:
-        raise _fail(f"{path.stat().st_size} bytes is more than the {MAX_BYTES} a model file "
+        raise corrupted(f"{path.stat().st_size} bytes is more than the {MAX_BYTES} a model file "
                     "may have")
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
-        raise _fail("not UTF-8 text") from None
+        raise corrupted("not UTF-8 text") from None
     except OSError as e:
         raise ModelFileError(f"cannot read model file {str(path)!r}: {e.strerror or e}") from None
     try:
         return json.loads(text)
     except json.JSONDecodeError as e:
-        raise _fail(f"not valid JSON ({e.msg} at line {e.lineno})") from None
+        raise corrupted(f"not valid JSON ({e.msg} at line {e.lineno})") from None
     except (ValueError, RecursionError) as e:  # huge integer literals, absurd nesting
-        raise _fail(f"not a usable JSON document ({type(e).__name__})") from None
+        raise corrupted(f"not a usable JSON document ({type(e).__name__})") from None
 
 
 def decode(doc, *, prior=None, functions=None) -> dict:
@@ -149,7 +152,6 @@ def decode(doc, *, prior=None, functions=None) -> dict:
     coefficients ``(n, p)``, the library of stored terms, optimizer and differentiation
     method, the prior (the given callable, or the stored sympy expressions) and, from
     version 4, the constructor's ``parameters`` as given (see :mod:`.model_parameters`)."""
-    from ..libraries import CustomLibrary
 
     version = _version(doc)
     choice = _fit_record(doc["fit"], version) if version >= 2 else None
@@ -157,9 +159,9 @@ def decode(doc, *, prior=None, functions=None) -> dict:
     declared = doc["user_functions"]
     if not isinstance(declared, list) or not all(isinstance(f, str) and IDENTIFIER.match(f)
                                                  for f in declared):
-        raise _fail("user_functions must be a list of identifiers")
+        raise corrupted("user_functions must be a list of identifiers")
     if not isinstance(doc["features"], list) or not doc["features"]:
-        raise _fail("features must be a non-empty list of expressions")
+        raise corrupted("features must be a non-empty list of expressions")
     check_features("the model file's library", len(doc["features"]))
     allowed = set(states) | set(inputs)
     features = [_expression(f, f"features[{i}]", allowed, declared)
@@ -177,7 +179,7 @@ def decode(doc, *, prior=None, functions=None) -> dict:
             "differentiation_method": _component(doc, "differentiation_method", version),
             "differentiation_choice": choice,
             "region": _region(doc, version, [*states, *inputs]),
-            "parameters": decode_parameters(doc["parameters"], _fail) if version >= 4 else {}}
+            "parameters": decode_parameters(doc["parameters"], corrupted) if version >= 4 else {}}
 
 
 def _fit_record(fit, version: int) -> dict | None:
@@ -185,25 +187,24 @@ def _fit_record(fit, version: int) -> dict | None:
     keys = FIT_KEYS[version]
     if not (isinstance(fit, dict) and set(fit) == keys
             and (fit["n_samples"] is None or type(fit["n_samples"]) is int)):
-        raise _fail(f"fit must be an object with exactly the keys {sorted(keys)} "
+        raise corrupted(f"fit must be an object with exactly the keys {sorted(keys)} "
                     "('n_samples': an integer or null, the others objects or null)")
     for key in keys - {"n_samples"}:
         value = fit[key]
         if value is not None and not (isinstance(value, dict) and _is_plain(value, 0)):
-            raise _fail(f"fit.{key} must be an object of names, numbers and lists")
+            raise corrupted(f"fit.{key} must be an object of names, numbers and lists")
     return fit["differentiation_choice"]
 
 
 def _region(doc, version: int, names):
     """The fitted region (None before version 3 or when none was recorded)."""
-    from .region import FittedRegion
 
     if version < 3 or doc["region"] is None:
         return None
     try:
         return FittedRegion.from_data(doc["region"], names)
     except ValueError as e:
-        raise _fail(str(e)) from None
+        raise corrupted(str(e)) from None
 
 
 def _is_plain(value, depth: int) -> bool:
@@ -235,13 +236,13 @@ def _plain(value):
 def _version(doc) -> int:
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         got = type(doc).__name__ if not isinstance(doc, dict) else repr(doc.get("format"))[:40]
-        raise _fail(f"format is {got}, not {FORMAT!r}")
+        raise corrupted(f"format is {got}, not {FORMAT!r}")
     version = doc.get("version")
     if type(version) is not int or version not in KEYS:
-        raise _fail(f"version {version!r:.20} is not one of {sorted(KEYS)} (a newer "
+        raise corrupted(f"version {version!r:.20} is not one of {sorted(KEYS)} (a newer "
                     "discrepancy may have written it)")
     if set(doc) != KEYS[version]:
-        raise _fail(f"version {version} needs exactly the keys {sorted(KEYS[version])}; got "
+        raise corrupted(f"version {version} needs exactly the keys {sorted(KEYS[version])}; got "
                     f"{sorted(map(str, doc))[:20]}")
     return version
 
@@ -250,7 +251,7 @@ def _names(doc, key) -> list[str]:
     names = doc[key]
     if not isinstance(names, list) or not all(isinstance(n, str) and IDENTIFIER.match(n)
                                               for n in names) or len(set(names)) != len(names):
-        raise _fail(f"{key} must be a list of distinct identifiers")
+        raise corrupted(f"{key} must be a list of distinct identifiers")
     return names
 
 
@@ -261,16 +262,16 @@ def _coefficients(doc, n: int, p: int) -> np.ndarray:
             isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
             for v in r) for r in rows)
     if not ok:
-        raise _fail(f"coefficients must be {n} rows of {p} finite numbers")
+        raise corrupted(f"coefficients must be {n} rows of {p} finite numbers")
     return np.array(rows, dtype=float).reshape(n, p)
 
 
 def _expression(data, where, allowed, functions):
     expr = from_data(data, where=where, functions=functions)
     if not {s.name for s in expr.free_symbols} <= allowed:
-        raise _fail(f"{where} uses variables outside {sorted(allowed)}")
+        raise corrupted(f"{where} uses variables outside {sorted(allowed)}")
     if expr.is_number and (expr.has(*_NON_REAL) or not _finite_number(expr)):
-        raise _fail(f"{where} is the constant {str(expr)[:40]}, which is not a finite real "
+        raise corrupted(f"{where} is the constant {str(expr)[:40]}, which is not a finite real "
                     "number")
     return expr
 
@@ -285,11 +286,12 @@ def _finite_number(expr) -> bool:
 def _prior(stored, states, allowed, given):
     if stored is not None and (not isinstance(stored, dict) or
                                stored.get("kind") not in ("sympy", "callable")):
-        raise _fail("prior must be null or an object with kind 'sympy' or 'callable'")
+        raise corrupted("prior must be null or an object with kind 'sympy' or 'callable'")
     if stored is not None:
         expected = {"kind", "expressions"} if stored["kind"] == "sympy" else {"kind", "name"}
         if set(stored) != expected:
-            raise _fail(f"a {stored['kind']} prior must have exactly the keys {sorted(expected)}")
+            raise corrupted(f"a {stored['kind']} prior must have exactly the keys "
+                            f"{sorted(expected)}")
     if given is not None:
         if stored is None:
             raise ParameterError("this model was fitted without a prior (plain SINDy); do not "
@@ -302,14 +304,12 @@ def _prior(stored, states, allowed, given):
                              "never store as code; pass it: load_model(path, prior=f_m)")
     exprs = stored["expressions"]
     if not isinstance(exprs, list) or len(exprs) != len(states):
-        raise _fail(f"prior expressions must be a list of {len(states)} expressions")
+        raise corrupted(f"prior expressions must be a list of {len(states)} expressions")
     return [_expression(e, f"prior[{i}]", allowed, []) for i, e in enumerate(exprs)]
 
 
 def _component(doc, key, version):
     """A stored optimizer / differentiation method rebuilt through its registry."""
-    from ..differentiation.base import METHODS
-    from ..optimizers.base import OPTIMIZERS
 
     if version < 2 or doc[key] is None:
         return None
@@ -317,6 +317,6 @@ def _component(doc, key, version):
     try:
         return registry.create(doc[key])
     except DiscrepancyError as e:
-        raise _fail(f"{key}: {e}") from None
+        raise corrupted(f"{key}: {e}") from None
 
 

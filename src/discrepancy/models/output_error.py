@@ -23,7 +23,7 @@ import scipy.optimize
 
 from ..data.trajectory import as_trajectories
 from ..errors import DataError, ParameterError, ShapeError
-from .inputs import check_hold, stage_inputs
+from ..hybrid.inputs import check_hold, stage_inputs
 
 #: relative ridge on the scaled coefficients while supports are compared
 RIDGE = 1e-6

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..constraints import Integral, Interval, Real, check_argument
 from ..errors import ParameterError, ShapeError
+from ..hybrid.outputs import OutputMap
 from ..optimizers.selection import one_standard_error
 from .output_error import (
     NEGLIGIBLE,
@@ -21,7 +22,6 @@ from .output_error import (
     warn_if_not_converged,
 )
 from .output_error import x0_bounds as bounds_of
-from .outputs import OutputMap
 from .shooting import ShootingModel
 
 #: simulations allowed per support on the path (the final refit may use more)

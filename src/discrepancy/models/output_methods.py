@@ -84,7 +84,7 @@ class OutputErrorMethods:
         repeated on the first 75 % of every record and both models forecast the rest;
         when the refit forecasts worse, the coefficients are kept (only the initial states
         are estimated) with a ``SelectionWarning``. ``refine_check_`` holds both held-out
-        errors and the outcome (:func:`discrepancy.selection.output_checks.check_refine`).
+        errors and the outcome (:func:`discrepancy.models.output_checks.check_refine`).
 
         Args:{common}
         """
@@ -97,7 +97,7 @@ class OutputErrorMethods:
         coef, x0s, fit = refit_outputs(self, y, t, u, outputs=outputs, x0=x0,
                                        x0_bounds=x0_bounds, u_hold=u_hold,
                                        substeps=substeps, coefficients=True)
-        from ..selection.output_checks import check_refine
+        from .output_checks import check_refine
 
         kw = dict(outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
                   substeps=substeps)
@@ -140,7 +140,7 @@ class OutputErrorMethods:
         import copy
 
         from ..data.trajectory import as_trajectories
-        from ..selection.output_checks import state_count
+        from .output_checks import state_count
         from .output_fit import refit_outputs
 
         first = as_trajectories(y, t, u, x_name="y")[0]
@@ -163,7 +163,7 @@ class OutputErrorMethods:
         import warnings
 
         from ..errors import PriorOnlyWarning
-        from ..selection.output_checks import simulated_region
+        from .output_checks import simulated_region
 
         self.forecast_selection_, self.region_ = None, None
         self.region_ = simulated_region(self, y, t, u, x0s=x0s, substeps=substeps,

@@ -3,6 +3,9 @@ one-step innovations of a Kalman filter (see :mod:`discrepancy.estimation.pem`),
 filter of the fitted model."""
 from __future__ import annotations
 
+from ..errors import NotFittedError, ParameterError
+from ..estimation import ExtendedKalmanFilter, UnscentedKalmanFilter
+from ..estimation.pem import fit_prediction_error
 from .arguments import keywords_only
 
 
@@ -56,8 +59,6 @@ class PredictionErrorMethods:
         gives the filter of the fitted model with these noise levels.
         """
         keywords_only("fit_prediction_error", args, "u, outputs and the options")
-        from ..estimation.pem import fit_prediction_error
-
         self._validate_params()
         setup, fit = fit_prediction_error(
             self, y, t, u, outputs=outputs, disturbances=disturbances,
@@ -75,9 +76,6 @@ class PredictionErrorMethods:
         """The :class:`~discrepancy.estimation.ExtendedKalmanFilter` (``kind="ukf"``: the
         unscented one) of this model with the outputs, disturbances and noise levels of
         its :meth:`fit_prediction_error`; ``options`` override any of them."""
-        from ..errors import NotFittedError, ParameterError
-        from ..estimation import ExtendedKalmanFilter, UnscentedKalmanFilter
-
         self.check_is_fitted()
         fit = getattr(self, "prediction_error_", None)
         if kind not in ("ekf", "ukf"):

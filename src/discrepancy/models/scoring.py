@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..accumulate import not_finite
-from ..errors import DataError, ParameterError, ShapeError, describe
+from ..errors import DataError, MissingDependencyError, ParameterError, ShapeError, describe
+from ..fitting.accumulate import not_finite
 from ..resources import check_memory, n_bytes
 from .checks import model_data
 
@@ -82,7 +82,6 @@ def _sklearn_r2():
     try:
         from sklearn.metrics import r2_score
     except ImportError:
-        from ..errors import MissingDependencyError
         raise MissingDependencyError("score(..., **metric_kws) with metric='r2' passes the "
                                      "options to sklearn.metrics.r2_score; install it with "
                                      "pip install scikit-learn") from None

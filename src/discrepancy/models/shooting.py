@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .casadi_form import _casadi, library_columns, prior_expression, rk4_step, stage_columns
+from ..hybrid.casadi_form import _casadi, library_columns, prior_expression, rk4_step, stage_columns
 
 #: steps per differentiated block
 BLOCK = 256
@@ -34,7 +34,7 @@ class ShootingModel:
     """The discretised hybrid model of one set-up, with all ``n p`` coefficients free.
 
     Args:
-        setup: a :class:`~discrepancy.models.setup.FitSetup` (names, prior, library).
+        setup: a :class:`~discrepancy.fitting.setup.FitSetup` (names, prior, library).
         substeps: RK4 steps per sample interval.
         check_points: ``(states, inputs)`` on which a traced callable prior is checked.
     """

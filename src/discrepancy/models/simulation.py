@@ -19,8 +19,8 @@ import scipy.integrate
 from ..constraints import Integral, Interval, Options, Real, check_argument
 from ..data.trajectory import as_times
 from ..errors import ParameterError, ShapeError, SimulationError, describe
+from ..hybrid.inputs import input_law, stage_inputs
 from ..runge_kutta import runge_kutta_step
-from .inputs import input_law, stage_inputs
 
 ADAPTIVE = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 METHODS = (*ADAPTIVE, "odeint", "rk4")
@@ -82,7 +82,7 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
             taken at the stage times).
         rtol, atol: tolerances of the adaptive methods.
         u_hold: ``"linear"``, ``"zoh"`` or ``"bandlimited"`` between input samples (see
-            :mod:`discrepancy.models.inputs`).
+            :mod:`discrepancy.hybrid.inputs`).
         max_evaluations: right-hand-side evaluations allowed (default ``500`` per output
             sample, at least 1e5).
         compiled: for ``"rk4"``, ``compiled(x0, stages, h) -> (k - 1, n)``, a compiled map of

@@ -14,6 +14,7 @@ import warnings
 import numpy as np
 
 from ..errors import DataError, PriorOnlyWarning
+from ..selection.choice import select_by_forecasts
 
 SELECTIONS = ("auto", "forecast", "optimizer")
 
@@ -29,8 +30,6 @@ def choose_terms(model, setup, stats, optimizer):
     """``(coef (n, p), ForecastSelection or None)`` for a fitted ``optimizer``."""
     if not by_forecasts(model.selection, setup.optimizer):
         return np.asarray(optimizer.coef_, dtype=float), None
-    from ..selection.choice import select_by_forecasts
-
     chosen = select_by_forecasts(setup, stats, optimizer, stats.held_out)
     if chosen is None:
         if model.selection == "forecast":

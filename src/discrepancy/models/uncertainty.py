@@ -35,10 +35,11 @@ from ..constraints import (
     check_argument,
     validate_params,
 )
-from ..errors import ParameterError
+from ..errors import ConvergenceError, ParameterError
 from ..optimizers import GramStatistics
 from ..optimizers.resampling import from_blocks
 from ..resources import check_memory, n_bytes
+from ..selection.candidates import FoldFits
 from .checks import model_data
 
 BOOTSTRAP_CONSTRAINTS = {
@@ -219,13 +220,12 @@ def _resample_fit(model, stats) -> np.ndarray:
         opt = copy.deepcopy(model.optimizer_)
         opt.fit_statistics(stats)
         return opt.coef_
-    from ..selection.candidates import FoldFits
-
     constraints = getattr(model.setup_.optimizer, "constraints", None)
     return FoldFits(stats, constraints, 0.0).coefficients(model.coef_ != 0, None)
 
 
-def _check_uncertainty(model, uncertainty) -> None:
+def check_uncertainty(model, uncertainty) -> None:
+    """ParameterError unless ``uncertainty`` is ``model``'s own bootstrap result."""
     if not isinstance(uncertainty, CoefficientUncertainty) or \
             uncertainty.samples.shape[1:] != model.coef_.shape or \
             list(uncertainty.feature_names) != model.get_feature_names() or \
@@ -246,7 +246,7 @@ def quantiles(curves: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]
 
 def predict_interval(model, x, u, uncertainty, level):
     """See :meth:`DiscrepancyModel.predict_interval`."""
-    _check_uncertainty(model, uncertainty)
+    check_uncertainty(model, uncertainty)
     x, u = model._variables(x, u)
     check_memory(f"the {len(uncertainty.samples)} resampled predictions of {len(x)} samples",
                  n_bytes((len(uncertainty.samples), *x.shape)) + n_bytes((len(x),
@@ -264,9 +264,8 @@ def simulate_interval(model, x0, t, u, uncertainty, level, n_draws, seed, **inte
 
     from tqdm.auto import tqdm
 
-    from ..errors import ConvergenceError
 
-    _check_uncertainty(model, uncertainty)
+    check_uncertainty(model, uncertainty)
     validate_params("simulate_interval", {"seed": seed}, {"seed": BOOTSTRAP_CONSTRAINTS["seed"]})
     samples = uncertainty.samples
     if n_draws is not None:

@@ -29,7 +29,7 @@ import scipy.linalg
 from ..constraints import InstanceOf, Integral, Interval, Options, Predicate
 from ..errors import ParameterError, ShapeError
 from .base import Optimizer, register
-from .linear_constraints import LinearConstraints, _qp, _restricted, reorder
+from .linear_constraints import LinearConstraints, reorder, restricted_rows, solve_qp
 from .sr3 import LAMBDA, PROX, REGULARIZERS, SR3, relax
 
 _MATRIX = Predicate(lambda v: np.ndim(v) == 2, "a 2-D array (constraints, n_targets n_features)")
@@ -229,8 +229,8 @@ def _convex(stats, regularizer, lam, eq_lhs, eq_rhs, ub_lhs, ub_rhs) -> np.ndarr
         ub = (np.vstack([a for a, _ in ub_parts]), np.concatenate([c for _, c in ub_parts]))
         split = size
     every = np.arange(hessian.shape[0])
-    x = _qp(hessian, linear, _restricted(*eq, every) if eq[0] is not None else None,
-            _restricted(*ub, every))
+    x = solve_qp(hessian, linear, restricted_rows(*eq, every) if eq[0] is not None else None,
+            restricted_rows(*ub, every))
     coef = x if split is None else x[:split] - x[split:]
     coef[np.abs(coef) < 1e-12 * max(1.0, float(np.max(np.abs(coef))))] = 0.0
     return coef.reshape(n, p)

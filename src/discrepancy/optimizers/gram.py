@@ -48,7 +48,7 @@ class GramStatistics:
             only for solvers that need them (``needs_rows``: trimming, bagging samples).
         held_out: samples kept beside the sums by whoever feeds them (a model's fit keeps
             forecast windows and the range of every variable there,
-            :class:`discrepancy.selection.held_out.HeldOutWindows`), or ``None``; merged by
+            :class:`discrepancy.fitting.held_out.HeldOutWindows`), or ``None``; merged by
             ``+=``, never read by the solvers.
     """
 

@@ -114,19 +114,19 @@ def constrained_solve(gram, rhs, support, constraints: LinearConstraints,
     if active.size == 0:
         _check_zero_feasible(constraints)
         return coef.reshape(n, p)
-    eq = _restricted(constraints.eq_lhs, constraints.eq_rhs, active)
-    ub = _restricted(constraints.ub_lhs, constraints.ub_rhs, active)
+    eq = restricted_rows(constraints.eq_lhs, constraints.eq_rhs, active)
+    ub = restricted_rows(constraints.ub_lhs, constraints.ub_rhs, active)
     rows, cols = np.divmod(active, p)
     hessian = np.where(rows[:, None] == rows[None, :], gram[np.ix_(cols, cols)], 0.0) \
         + alpha * np.eye(active.size)
     linear = rhs[cols, rows]
-    coef[active] = _qp(hessian, linear, eq, ub)
+    coef[active] = solve_qp(hessian, linear, eq, ub)
     # a coefficient the constraints pin to zero comes out as rounding (~1e-17): it is zero
     coef[np.abs(coef) < 1e-13 * max(1.0, float(np.max(np.abs(coef))))] = 0.0
     return coef.reshape(n, p)
 
 
-def _restricted(lhs, rhs, active):
+def restricted_rows(lhs, rhs, active):
     """Constraint rows on the active coefficients; rows on inactive ones only (0 = rhs
     must then hold) are checked, not kept."""
     if lhs is None:
@@ -145,7 +145,7 @@ def _check_zero_feasible(c: LinearConstraints) -> None:
                                "zero")
 
 
-def _qp(hessian, linear, eq, ub) -> np.ndarray:
+def solve_qp(hessian, linear, eq, ub) -> np.ndarray:
     """argmin ½ xᵀHx - linearᵀx (H = 2 Gram, so x solves H x = 2 b) s.t. eq, ub."""
     h, g = 2 * hessian, 2 * linear
     for part in (eq, ub):  # rows of inactive coefficients only: must hold with zeros

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import sympy as sp
 
+from ..constraints import Integral, Interval, validate_params
 from ..libraries.pde import parse_derivative
-from ..models.export import _part, discrepancy_expressions
+from ..models.export import discrepancy_expressions, exported_part
 from ..symbolic import symbol
 
 
-class _ExportView:
+class ExportView:
     """The attributes the ODE export helpers read, for a fitted PDE model."""
 
     def __init__(self, model):
@@ -26,9 +27,11 @@ class _ExportView:
         self.variable_names_ = model.setup_.variables.names
 
     def get_feature_names(self):
+        """The PDE model's feature names."""
         return self.model.get_feature_names()
 
     def check_is_fitted(self):
+        """The PDE model's own check."""
         self.model.check_is_fitted()
 
 
@@ -37,8 +40,8 @@ def to_sympy(model, part=None, derivatives: bool = False) -> list[sp.Expr]:
     :meth:`~discrepancy.PDEDiscrepancyModel.to_sympy`): the hybrid ``N_m + g`` or, with
     ``part="discrepancy"`` (the default when the prior is a callable), ``g`` alone; in
     jet symbols (``u_xx``), or with ``derivatives=True`` in ``sympy.Derivative`` form."""
-    view = _ExportView(model)
-    part = _part(view, part)
+    view = ExportView(model)
+    part = exported_part(view, part)
     g = discrepancy_expressions(view)
     exprs = g if part == "discrepancy" or not model.prior_.is_symbolic else [
         f + gi for f, gi in zip(model.prior_.expressions, g, strict=True)]
@@ -69,7 +72,6 @@ def to_latex(model, precision: int = 4, part=None) -> str:
     per field with floats rounded to ``precision`` significant digits (see
     :meth:`~discrepancy.PDEDiscrepancyModel.to_latex`); a discrepancy alone is written
     ``\delta u_t``."""
-    from ..constraints import Integral, Interval, validate_params
 
     validate_params("to_latex", {"precision": precision},
                     {"precision": [Interval(Integral, 1, 17)]})

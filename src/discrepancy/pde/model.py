@@ -7,14 +7,23 @@ import numpy as np
 
 from ..base import Estimator
 from ..constraints import InstanceOf, Options, Predicate, is_callable
-from ..data.fields import Grid, as_field_runs, field_array
-from ..differentiation import Differentiator
+from ..data.chunks import is_dask
+from ..data.fields import Grid, as_field_runs, field_array, input_array
+from ..differentiation import Differentiator, FiniteDifference
 from ..differentiation.spatial import SpatialDifferentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
-from ..libraries import FeatureLibrary
+from ..libraries import FeatureLibrary, PolynomialLibrary
+from ..models.export import equations
 from ..optimizers import GramStatistics, Optimizer
 from ..symbolic import compile_numpy, feature_name
+from .distributed import dask_statistics
+from .export import ExportView, to_latex, to_sympy
+from .integrate import simulate
+from .resolve import first_snapshots, resolve_setup
 from .setup import FieldSetup
+from .simulation import simulation_methods
+from .solve import solve
+from .streaming import FieldSource, stream_statistics
 from .weak import FieldWeakForm
 
 _NAMES = [None, InstanceOf(str, "a name"),
@@ -91,16 +100,13 @@ class PDEDiscrepancyModel(Estimator):
         Returns:
             self
         """
-        from .streaming import FieldSource, stream_statistics
 
         self._validate_params()
         if isinstance(u, FieldSource):
             setup, stats = stream_statistics(self, u, progress=progress)
         elif _is_dask(u):
-            from .distributed import dask_statistics
             setup, stats = dask_statistics(self, u, t=t, grid=grid, progress=progress)
         else:
-            from .resolve import first_snapshots
 
             runs = as_field_runs(u, t, grid, inputs)
             first = runs[0]
@@ -120,7 +126,6 @@ class PDEDiscrepancyModel(Estimator):
         """The frozen set-up for ``n_fields`` fields and ``n_inputs`` inputs on ``grid``
         (``sample``: the data's first snapshots, which data-driven choices look at;
         ``lengths``: snapshots per run)."""
-        from .resolve import resolve_setup
 
         self._validate_params()
         if not isinstance(grid, Grid):
@@ -132,14 +137,12 @@ class PDEDiscrepancyModel(Estimator):
                    n_inputs: int = 0) -> PDEDiscrepancyModel:
         """A model whose discrepancy is zero: the prior alone, ready to simulate (to make
         data, or to compare the hybrid with)."""
-        from ..differentiation import FiniteDifference
 
         n = len(prior) if isinstance(prior, (list, tuple)) else len(
             [field_names] if isinstance(field_names, str) else field_names or ["u"])
         model = cls(prior=prior, differentiation_method=FiniteDifference(),
                     spatial_differentiation="finite_difference", field_names=field_names,
                     input_names=input_names)
-        from ..libraries import PolynomialLibrary
         model.feature_library = PolynomialLibrary(0)
         setup = model.make_setup(n, n_inputs, grid)
         model._set_fit(setup, np.zeros((n, setup.n_features)), None, None)
@@ -156,7 +159,6 @@ class PDEDiscrepancyModel(Estimator):
         if stats.count == 0 or not np.any(stats.gram):
             raise DataError("the statistics hold no usable rows (runs too short for the "
                             "test functions or derivative windows?)")
-        from .solve import solve
 
         optimizer = solve(copy.deepcopy(setup.optimizer), stats)
         self._set_fit(setup, optimizer.coef_, optimizer, stats)
@@ -180,7 +182,6 @@ class PDEDiscrepancyModel(Estimator):
     # --------------------------------------------------------------- evaluation
     def _snapshots(self, u, inputs):
         """Checked snapshots ``(k, *shape, n)`` and inputs ``(k, *shape, r)`` or ``None``."""
-        from ..data.fields import input_array
 
         self.check_is_fitted()
         u = field_array("u", u, self.grid_, n_fields=len(self.field_names_))
@@ -208,14 +209,12 @@ class PDEDiscrepancyModel(Estimator):
     def discrepancy(self, u, inputs=None) -> np.ndarray:
         """The learned ``g`` on snapshots ``u`` ``(k, *grid.shape[, n])``, ``(k, *shape, n)``
         (derivatives spectral on periodic axes, 4th-order differences elsewhere)."""
-        from .simulation import simulation_methods
 
         u, inputs = self._snapshots(u, inputs)
         return self._evaluate(u, inputs, simulation_methods(self.grid_), "discrepancy")
 
     def predict(self, u, inputs=None) -> np.ndarray:
         """``u_t = N_m + g`` of the hybrid model on snapshots, ``(k, *shape, n)``."""
-        from .simulation import simulation_methods
 
         u, inputs = self._snapshots(u, inputs)
         return self._evaluate(u, inputs, simulation_methods(self.grid_), "hybrid")
@@ -229,7 +228,6 @@ class PDEDiscrepancyModel(Estimator):
         ``"etdrk4"`` or a ``solve_ivp`` method; ``inputs``: a callable ``f(t)`` returning
         ``(*grid.shape, r)`` or ``(r,)``; ``boundary``: ``"fixed"`` holds the ends of
         non-periodic axes at ``u0`` (Dirichlet), ``"free"`` does not."""
-        from .integrate import simulate
         self.check_is_fitted()
         return simulate(self, u0, t, inputs=inputs, method=method, rtol=rtol, atol=atol,
                         boundary=boundary)
@@ -255,9 +253,7 @@ class PDEDiscrepancyModel(Estimator):
 
     def equations(self, precision: int = 3) -> list[str]:
         """Right-hand sides as text: ``prior - 1.000 u_xx``."""
-        from ..models.export import equations
-        from .export import _ExportView
-        return equations(_ExportView(self), precision)
+        return equations(ExportView(self), precision)
 
     def print(self, precision: int = 3) -> None:
         """One line per field, ``(u)_t = prior + 0.050 u_xx``, then how the derivatives were
@@ -272,17 +268,14 @@ class PDEDiscrepancyModel(Estimator):
     def to_sympy(self, part: str | None = None, *, derivatives: bool = False):
         """Right-hand sides as sympy expressions (``part`` as for ODE models); with
         ``derivatives=True`` in ``sympy.Derivative`` form of functions ``u(t, x)``."""
-        from .export import to_sympy
         return to_sympy(self, part, derivatives)
 
     def to_latex(self, precision: int = 4, part: str | None = None) -> str:
         """LaTeX ``aligned`` block: ``u_{t} &= - u u_{x} - 1.0 u_{xx} ...``."""
-        from .export import to_latex
         return to_latex(self, precision, part)
 
 
 def _is_dask(u) -> bool:
     """A dask array, or a non-empty list of them (runs)."""
-    from ..data.chunks import is_dask
     items = list(u) if isinstance(u, (list, tuple)) else [u]
     return bool(items) and all(is_dask(a) for a in items)

@@ -10,12 +10,18 @@ from __future__ import annotations
 import copy
 
 from ..differentiation import Differentiator, get_differentiation_method
-from ..differentiation.spatial import SpatialDifferentiator, get_spatial_method
+from ..differentiation.spatial import (
+    SpatialDifferentiator,
+    SpatialFiniteDifference,
+    SpatialSpectral,
+    get_spatial_method,
+)
 from ..errors import ParameterError
+from ..fitting.setup import resolve_names
 from ..libraries import FeatureLibrary, PolynomialLibrary
-from ..libraries.pde import PDELibrary, library_derivative_order
-from ..models.setup import resolve_names
+from ..libraries.pde import PDELibrary, library_derivative_order, multiindices
 from ..optimizers import get_optimizer
+from .auto import choose, time_smoothing
 from .prior import FieldPrior
 from .setup import FieldSetup
 from .variables import FieldVariables
@@ -36,7 +42,6 @@ def default_library(prior_order: int, n_fields: int, ndim: int) -> PDELibrary:
     derivatives (20 columns), two fields in 2-D second ones (110 columns)."""
     from math import comb
 
-    from ..libraries.pde import multiindices
 
     functions = comb(n_fields + DEFAULT_DEGREE, DEFAULT_DEGREE)
     order = max(2, prior_order)
@@ -102,7 +107,6 @@ def first_snapshots(runs, budget: int = SAMPLE_SNAPSHOTS) -> list:
 def resolve_methods(model, grid, sample, n_fields: int, order: int, shortest: int):
     """``(time_methods, spatial, choice)`` from the model's differentiation parameters
     (``shortest``: snapshots of the shortest run)."""
-    from .auto import choose
 
     method = model.differentiation_method
     spatial = _spatial(model.spatial_differentiation, grid)
@@ -127,7 +131,6 @@ def resolve_methods(model, grid, sample, n_fields: int, order: int, shortest: in
                              f"or a time Differentiator; got {method!r}")
     method._validate_params()
     if getattr(method, "data_driven", False):
-        from .auto import time_smoothing
 
         methods, info = time_smoothing(sample, method)
         return methods, spatial or _spatial("auto", grid, clean=True), info
@@ -143,7 +146,6 @@ def _powered(form: FieldWeakForm, order: int) -> FieldWeakForm:
 def _spatial(given, grid, *, clean: bool = False):
     """One spatial method per axis from the parameter (``None``/"auto": decided from the
     data, unless ``clean``: spectral on periodic axes, 6th-order differences elsewhere)."""
-    from ..differentiation.spatial import SpatialFiniteDifference, SpatialSpectral
 
     if given is None or given == "auto":
         if not clean:

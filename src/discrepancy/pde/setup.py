@@ -14,14 +14,15 @@ from functools import cached_property
 
 import numpy as np
 
-from ..accumulate import Names, accumulate
 from ..data.fields import FieldRun, Grid
+from ..fitting.accumulate import Names, accumulate, statistics_bytes
+from ..fitting.rows import copy_into
 from ..libraries import FeatureLibrary
-from ..models.setup import _copy_into
 from ..optimizers import GramStatistics, Optimizer
+from ..resources import SMALLER_LIBRARY, check_memory
 from .prior import FieldPrior
 from .variables import FieldVariables
-from .weak import FieldWeakForm, WeakPlan, weak_rows
+from .weak import FieldWeakForm, WeakPlan, centres, weak_rows
 
 #: most cross-validation segments kept (each holds its own Gram statistics)
 MAX_SEGMENTS = 40
@@ -114,7 +115,6 @@ class FieldSetup:
         the test-function centres on the grid in the weak form."""
         if self.weak is None:
             return self.grid.size
-        from .weak import centres
 
         widths = [int(w) for w in self.weak.widths[1:]]
         strides = self.weak.strides(self.grid)
@@ -156,7 +156,7 @@ class FieldSetup:
     @property
     def transform(self):
         """Turns the ``z`` of :meth:`rows` into Θ (``transform(z, out=...)``)."""
-        return _copy_into if self.weak is not None else self.library.transform
+        return copy_into if self.weak is not None else self.library.transform
 
     @cached_property
     def names(self) -> Names:
@@ -173,8 +173,6 @@ class FieldSetup:
     def new_statistics(self) -> GramStatistics:
         """Empty statistics kept per segment of :attr:`segment_snapshots` snapshots (the
         purged cross-validation's blocks, :mod:`discrepancy.pde.solve`)."""
-        from ..accumulate import statistics_bytes
-        from ..resources import SMALLER_LIBRARY, check_memory
 
         p, n = self.n_features, self.n_fields
         segments = max(1, -(-self.probe_snapshots // self.segment_snapshots))

@@ -1,16 +1,18 @@
-"""Choosing supports, libraries and procedures by forecasts, the prior alone included.
+"""Choosing supports and libraries by forecasts, the prior alone included. Below the
+models: it works on a fit's set-up and statistics and knows no model class.
 
 * :mod:`.choice`: the default term selection of ``DiscrepancyModel.fit``: supports
   proposed by equation error, scored by forecasts over held-out blocks of the training
   data (:class:`ForecastSelection`, in ``model.forecast_selection_``);
-* :mod:`.procedures`: :func:`choose_procedure`, libraries or whole procedures chosen by
-  rolling-origin forecasts inside the training data, with :func:`default_libraries`;
-* :mod:`.held_out`, :mod:`.forecast`, :mod:`.candidates`: the windows kept beside the
-  statistics, the batched forecasts and the candidates;
-* :mod:`.output_checks`: output-error fits judged by held-out forecasts (``refine``).
+* :mod:`.forecast`, :mod:`.horizon`, :mod:`.candidates`: the batched forecasts, how far
+  they reach and the candidates (the windows they start from are kept beside the
+  statistics, :mod:`discrepancy.fitting.held_out`);
+* :func:`default_libraries`: candidate libraries from the data and the prior, which
+  :func:`discrepancy.choose_procedure` (:mod:`discrepancy.procedures`, above the models)
+  compares as whole procedures; output-error fits are judged in
+  :mod:`discrepancy.models.output_checks`.
 """
 from .candidate_libraries import default_libraries
 from .choice import ForecastSelection
-from .procedures import ProcedureChoice, choose_procedure
 
-__all__ = ["ForecastSelection", "ProcedureChoice", "choose_procedure", "default_libraries"]
+__all__ = ["ForecastSelection", "default_libraries"]

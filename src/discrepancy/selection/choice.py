@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..differentiation import WeakForm
 from ..optimizers.selection import one_standard_error
 from . import candidates as cands
 from .forecast import CAP, forecast_scores, prepare, refine_origins
@@ -114,8 +113,8 @@ def select_by_forecasts(setup, stats, optimizer, held_out):
     if len(windows) < MIN_WINDOWS or not stats.usable_folds():
         return None
     derivatives = stats.signal / stats.count if stats.count else None
-    origins = prepare(windows, setup, mean_square_rate=None if setup.discrete_time
-                      or isinstance(setup.differentiation, WeakForm) else derivatives)
+    origins = prepare(windows, setup,
+                      mean_square_rate=None if setup.form.raw_origins else derivatives)
     everything = np.arange(origins.n_windows)
     coef, reference = _reference(setup, origins, optimizer)
     origins = sensitive_leads(origins, reference)

@@ -131,11 +131,9 @@ def _origin(window, setup):
     """``(state, derivative or None)`` at a window's origin as the fit's method estimates
     them, from the samples within the method's reach of it (raw for maps, the weak form
     and windows too short to smooth)."""
-    from ..differentiation import WeakForm
-
     raw = window.x[window.origin], None
     method = setup.differentiation
-    if setup.discrete_time or isinstance(method, WeakForm):
+    if setup.form.raw_origins:
         return raw
     reach = method.halo if method.halo is not None else window.origin
     lo, hi = window.origin - min(reach, window.origin), window.origin + reach + 1

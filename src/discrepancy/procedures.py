@@ -12,24 +12,34 @@ kept apart stays unseen.
 Forecasts: with every state measured (``fit``), from the state at the origin over the
 horizon (a quarter of the shortest record unless given), scored as the model's own
 selection scores them (the initial state fitted to the window, each window until the
-prior's sensitivity to its start saturates, :mod:`.forecast`).
+prior's sensitivity to its start saturates, :mod:`discrepancy.selection.forecast`).
 With outputs (``fit_outputs``), the fitted simulation continues past the origin and its
 outputs are scored to the end of each record (as the benchmarks score a model).
 """
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+from tqdm.auto import tqdm
 
-from ..base import clone
-from ..constraints import Integral, Interval, check_argument
-from ..data.trajectory import as_trajectories
-from ..errors import ConvergenceError, DataError, ParameterError, describe
-from ..libraries import FeatureLibrary
-from ..optimizers.selection import one_standard_error
-from .choice import TOLERANCE
+from .base import clone
+from .constraints import Integral, Interval, check_argument
+from .data.trajectory import Trajectory, as_trajectories
+from .errors import ConvergenceError, DataError, ParameterError, describe
+from .fitting.held_out import Window
+from .fitting.setup import resolve_names
+from .hybrid.outputs import OutputMap
+from .libraries import FeatureLibrary
+from .models import DiscrepancyModel
+from .models.output_checks import simulate_quietly, state_count
+from .optimizers.selection import one_standard_error
+from .selection.candidate_libraries import default_libraries
+from .selection.choice import TOLERANCE
+from .selection.forecast import forecast_scores, prepare
+from .selection.horizon import sensitive_leads
 
 #: where the first origin lies, as a share of each record
 FIRST_ORIGIN = 0.5
@@ -87,8 +97,6 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
             says forecasts stop meaning anything, as in the model's own selection).
         fit_kws: further keyword arguments of ``fit`` or ``fit_outputs``.
     """
-    from tqdm.auto import tqdm
-
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
     check_argument("n_origins", n_origins, Interval(Integral, 2))
     templates = _templates(model, candidates, records, outputs)
@@ -127,11 +135,6 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
 
 
 def _templates(model, candidates, records, outputs) -> dict:
-    from ..models import DiscrepancyModel
-    from ..models.setup import resolve_names
-    from .candidate_libraries import default_libraries
-    from .output_checks import state_count
-
     if not isinstance(model, DiscrepancyModel) or hasattr(model, "coef_"):
         raise ParameterError(f"model must be an unfitted DiscrepancyModel; got "
                              f"{describe(model)}")
@@ -164,8 +167,6 @@ def _variables_with_data(records, states, outputs):
     """States ``(m, n)`` (NaN where unmeasured) and the names of the measured ones."""
     if outputs is None:
         return np.vstack([r.x for r in records]), list(states)
-    from ..models.outputs import OutputMap
-
     out_map = OutputMap(outputs, states)
     y = np.vstack([r.x for r in records])
     x = np.full((len(y), len(states)), np.nan)
@@ -208,11 +209,6 @@ class _StateForecasts(_Judge):
         return model.fit(x, t=t, u=u, **self.fit_kws)
 
     def score(self, template, fraction) -> float:
-        import warnings
-
-        from .forecast import forecast_scores, prepare
-        from .horizon import sensitive_leads
-
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             self.last = model = self.fit(template, fraction)
@@ -227,8 +223,6 @@ class _StateForecasts(_Judge):
         return float(np.mean(forecast_scores(setup, origins, coef, everything, steps).score))
 
     def _windows(self, setup, fraction):
-        from .held_out import Window
-
         pre, windows = setup.new_held_out().pre, []
         for rec in self.records:
             cut = int(round(rec.n_samples * fraction))
@@ -254,11 +248,6 @@ class _OutputForecasts(_Judge):
         return model.fit_outputs(y, t=t, u=u, outputs=self.outputs, **self.fit_kws)
 
     def score(self, template, fraction) -> float:
-        import warnings
-
-        from ..models.outputs import OutputMap
-        from .output_checks import simulate_quietly
-
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
@@ -282,7 +271,5 @@ class _OutputForecasts(_Judge):
 
 
 def _head(record, fraction):
-    from ..data.trajectory import Trajectory
-
     k = record.n_samples if fraction >= 1 else int(round(record.n_samples * fraction))
     return Trajectory(record.t[:k], record.x[:k], None if record.u is None else record.u[:k])

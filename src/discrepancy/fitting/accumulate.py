@@ -28,8 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import FeatureError
-from .optimizers.gram import GramStatistics
+from ..errors import FeatureError
+from ..optimizers.gram import GramStatistics
 
 #: rows of Θ formed at a time (counted from the start of a trajectory)
 BLOCK_ROWS = 4096
@@ -102,7 +102,7 @@ class BlockAccumulator:
             finite (:class:`Names`).
 
     Feed rows of one trajectory with :meth:`add`; every call but the last of a
-    trajectory must hold a whole number of blocks (:class:`~discrepancy.streaming`
+    trajectory must hold a whole number of blocks (:mod:`~discrepancy.fitting.streaming`
     carries the remainder over), then :meth:`finish_trajectory` before the next one.
     """
 

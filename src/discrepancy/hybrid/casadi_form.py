@@ -34,7 +34,7 @@ def variables(names, x, u) -> dict:
 def prior_expression(prior, x, u, *, check_points=None):
     """CasADi column ``(n, 1)`` of the prior ``f_m(x, u)`` at the symbols ``x``, ``u``.
 
-    ``prior`` is a :class:`~discrepancy.models.prior.Prior`. ``check_points``: an optional
+    ``prior`` is a :class:`~discrepancy.fitting.prior.Prior`. ``check_points``: an optional
     ``(states (k, n), inputs (k, r) or None)`` on which a traced callable must agree with
     itself evaluated by numpy."""
     ca = _casadi()

@@ -15,9 +15,10 @@ import warnings
 import numpy as np
 
 from ..data.trajectory import as_trajectories
-from ..errors import ConvergenceError, SelectionWarning
-from ..models.outputs import OutputMap
-from ..models.region import FittedRegion
+from ..errors import ConvergenceError, ParameterError, SelectionWarning
+from ..hybrid.outputs import OutputMap
+from .output_fit import refit_outputs
+from .region import FittedRegion
 
 #: the share of every record held out to judge a refit
 HOLDOUT = 0.25
@@ -26,7 +27,6 @@ HOLDOUT = 0.25
 def state_count(model, x0=None) -> int:
     """The number of states of a model about to be fitted by output error: its state names,
     a sympy prior's length, or the initial state's."""
-    from ..errors import ParameterError
 
     names, prior = model.state_names, model.prior
     if names is not None:
@@ -72,7 +72,6 @@ def check_refine(model, before: np.ndarray, y, t, u, *, outputs, x0, x0_bounds, 
     every record and compare held-out forecasts with ``before``'s. Returns
     ``{"kept_original", "heldout_error_original", "heldout_error_refined"}`` (scaled RMS
     output errors on the held-out parts)."""
-    from ..models.output_fit import refit_outputs
 
     records = as_trajectories(y, t, u, x_name="y")
     cut = [int(round(r.n_samples * (1 - HOLDOUT))) for r in records]

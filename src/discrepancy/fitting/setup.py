@@ -3,8 +3,10 @@
 A :class:`FitSetup` turns one trajectory into the regression's Gram statistics
 (derivative -> residual ``x_dot - f_m`` -> library Θ -> ``ΘᵀΘ``, ``Θᵀy``, ``yᵀy``). It is
 the seam between the model and the ways data arrive: the in-memory fit, the chunked stream
-(:mod:`discrepancy.streaming`) and Dask (:mod:`discrepancy.distributed`) all compute
-statistics with the same set-up and hand them to :meth:`DiscrepancyModel.fit_statistics`.
+(:mod:`discrepancy.fitting.streaming`) and Dask (:mod:`discrepancy.fitting.distributed`) all
+compute statistics with the same set-up and hand them to the model's ``fit_statistics``. The
+set-up knows no model: the model resolves its parameters into one
+(:func:`discrepancy.models.resolve.resolve_setup`).
 """
 from __future__ import annotations
 
@@ -14,12 +16,17 @@ from functools import cached_property
 import numpy as np
 
 from ..data.trajectory import Trajectory
-from ..differentiation import Differentiator, WeakForm
-from ..errors import ParameterError, ShapeError
+from ..differentiation import Differentiator, get_differentiation_method
+from ..errors import ShapeError
 from ..libraries import FeatureLibrary
-from ..optimizers import GramStatistics, Optimizer, PriorOnly
+from ..optimizers import GramStatistics, Optimizer
+from ..optimizers.resampling import Rows
+from ..resources import SMALLER_LIBRARY, check_memory, n_bytes
 from ..symbolic import IDENTIFIER
+from .accumulate import BLOCK_ROWS, Names, accumulate, statistics_bytes
+from .held_out import HeldOutWindows
 from .prior import Prior
+from .rows import RowForm, row_form
 
 #: cross-validation folds kept in the statistics (contiguous segments dealt out in turn)
 N_FOLDS = 5
@@ -75,62 +82,31 @@ class FitSetup:
         """Number of library columns ``p``."""
         return self.library.n_features_
 
+    @cached_property
+    def form(self) -> RowForm:
+        """How a trajectory becomes rows: pointwise derivatives, the weak form or a map's
+        next sample (:mod:`discrepancy.fitting.rows`)."""
+        return row_form(self.differentiation, discrete_time=self.discrete_time)
+
     def rows(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(z, y, x_dot)`` of one trajectory: what :attr:`transform` turns into the
         regression's rows of Θ (the variables ``[x_smooth, u]`` ``(m, n + r)``), the
         residual ``x_dot - f_m`` ``(m, n)`` and the derivatives ``(m, n)``. In the weak form
         (:class:`~discrepancy.differentiation.WeakForm`) every quantity is integrated against
         each sample's test function instead, and ``z`` is already Θ."""
-        if self.discrete_time:
-            from .discrete import discrete_rows
-            return discrete_rows(self, trajectory)
-        if trajectory.x_dot is None and isinstance(self.differentiation, WeakForm):
-            return self._weak_rows(trajectory)
-        u = trajectory.u
-        if trajectory.x_dot is None:
-            xs, xd = self.differentiation.smooth_and_differentiate(trajectory.x, trajectory.t)
-            kept = self._kept(trajectory)  # ends a method leaves undefined (drop_endpoints)
-            xs, xd, u = xs[kept], xd[kept], None if u is None else u[kept]
-        else:
-            xs, xd = trajectory.x, trajectory.x_dot
-        y = xd - self.prior(xs, u)
-        z = xs if u is None else np.hstack([xs, u])
-        return z, y, xd
-
-    def _kept(self, trajectory: Trajectory) -> slice:
-        """The rows of ``trajectory`` that give regression rows (all but the ends a
-        differentiation method with ``drop_endpoints`` leaves undefined)."""
-        if trajectory.x_dot is not None or self.discrete_time:
-            return slice(None)
-        first, last = self.differentiation.dropped_rows
-        return slice(first, trajectory.n_samples - last)
+        return self.form.rows(self, trajectory)
 
     def row_weights(self, trajectory: Trajectory) -> np.ndarray | None:
         """The sample weights from the first of :meth:`rows`' rows on (``None`` when
         unweighted; a map's last sample, which has no successor, gives no row)."""
         if trajectory.weight is None:
             return None
-        return trajectory.weight[self._kept(trajectory)]
-
-    def _weak_rows(self, trajectory: Trajectory):
-        from ..resources import CHUNKED, check_memory, n_bytes
-
-        x, u = trajectory.x, trajectory.u
-        check_memory(f"the weak form's integrals of {len(x)} samples and {self.n_features} "
-                     "columns", 3 * n_bytes((len(x), self.n_features + self.n_states)),
-                     f"Pass the trajectory in pieces: {CHUNKED}")
-        theta = self.library.transform(x if u is None else np.hstack([x, u]))
-        values = np.hstack([theta, self.prior(x, u)])
-        integral, by_parts = self.differentiation.rows(x, trajectory.t, values)
-        p = theta.shape[1]
-        return integral[:, :p], by_parts - integral[:, p:], by_parts
+        return trajectory.weight[self.form.kept(trajectory)]
 
     @property
     def transform(self):
         """Turns the ``z`` of :meth:`rows` into Θ (``transform(z, out=...)``)."""
-        if isinstance(self.differentiation, WeakForm):
-            return _copy_into
-        return self.library.transform
+        return self.form.transform(self.library)
 
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m``
@@ -144,8 +120,6 @@ class FitSetup:
         about one window) and of ``MIN_SEGMENT`` (512) or, for short data (``probe_rows``,
         the rows of the first ``FOLD_PROBE_ROWS`` seen), of a tenth of them; at most one
         accumulation block."""
-        from ..accumulate import BLOCK_ROWS
-
         halo = self.differentiation.halo or 0
         short = max(16, 1 << (max(1, self.probe_rows // (2 * N_FOLDS)).bit_length() - 1))
         need = max(min(MIN_SEGMENT, short), 2 * (2 * halo + 1))
@@ -155,9 +129,6 @@ class FitSetup:
         """Empty statistics of the right size (``p`` features, ``n`` targets), kept per
         cross-validation fold as well (:data:`N_FOLDS` folds of ``fold_segment`` rows).
         Raises ResourceError when a fit's statistics would not fit in memory."""
-        from ..accumulate import statistics_bytes
-        from ..resources import SMALLER_LIBRARY, check_memory
-
         p, n = self.n_features, self.n_states
         check_memory(f"the Gram statistics of {p} library columns", statistics_bytes(p, n),
                      SMALLER_LIBRARY + "; they are p x p, so chunked fitting does not help")
@@ -167,34 +138,22 @@ class FitSetup:
 
     def new_held_out(self):
         """Empty forecast windows for these statistics' folds (see
-        :mod:`discrepancy.selection.held_out`); ``pre``: the smoothing's halo (none for maps
+        :mod:`discrepancy.fitting.held_out`); ``pre``: the smoothing's halo (none for maps
         and the weak form, whose origins are raw samples)."""
-        from ..selection.held_out import GLOBAL_PRE, HeldOutWindows
-
-        if self.discrete_time or isinstance(self.differentiation, WeakForm):
-            pre = 0
-        else:
-            halo = self.differentiation.halo
-            pre = GLOBAL_PRE if halo is None else int(halo)
-        return HeldOutWindows(self.fold_segment, N_FOLDS, pre)
+        return HeldOutWindows(self.fold_segment, N_FOLDS, self.form.pre)
 
     @cached_property
     def names(self):
         """Names of Θ's columns and of the variables, for messages about the data."""
-        from ..accumulate import Names
-
-        variables = [] if isinstance(self.differentiation, WeakForm) else self.variable_names
-        return Names(self.library.get_feature_names(), variables)
+        return Names(self.library.get_feature_names(), self.form.variables(self.variable_names))
 
     def statistics(self, trajectory: Trajectory, *,
                    into: GramStatistics | None = None) -> GramStatistics:
         """Add one trajectory's statistics to ``into`` (default: new ones); returns them.
 
-        Rows go through the fixed block grid of :mod:`discrepancy.accumulate`, so the sums
+        Rows go through the fixed block grid of :mod:`discrepancy.fitting.accumulate`, so the sums
         do not depend on how the rows arrive (whole, in chunks, on Dask workers).
         """
-        from ..accumulate import accumulate
-
         stats = self.new_statistics() if into is None else into
         z, y, x_dot = self.rows(trajectory)
         weight = self.row_weights(trajectory)
@@ -210,92 +169,12 @@ class FitSetup:
         return stats
 
     def _keep_rows(self, stats, z, y, x_dot, weight, first: int) -> None:
-        from ..optimizers.resampling import Rows
-        from ..resources import check_memory, n_bytes
-
         check_memory(f"the {len(z)} rows of Θ that {self.optimizer!r} needs",
                      n_bytes((len(z), self.n_features)), "Use a smaller library or fewer "
                      "samples, or a solver that works on the statistics alone")
         fold = ((first + np.arange(len(z))) // stats.segment) % stats.n_folds
         rows = Rows(self.transform(z), y, x_dot, weight, fold)
         stats.rows = rows if stats.rows is None else stats.rows + rows
-
-
-def _copy_into(theta: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarray:
-    if out is None:
-        return theta
-    out[...] = theta
-    return out
-
-
-def resolve_setup(model, n_states: int, n_inputs: int, sample=None,
-                  feature_names=None) -> FitSetup:
-    """The set-up of ``model``'s parameters for ``n_states`` states and ``n_inputs`` inputs:
-    names checked, defaults filled in, library specs parsed and bound, copies of the
-    optimizer and differentiation method (the model's own parameters are never changed).
-
-    ``sample``: trajectories a data-driven differentiation method (the default ``"auto"``)
-    is chosen from; those with measured ``x_dot`` need none. ``feature_names``: the names of
-    the states then the inputs, replacing the model's (PySINDy's ``fit(feature_names=)``)."""
-    import copy
-
-    from ..differentiation import get_differentiation_method
-    from ..libraries import PolynomialLibrary
-    from ..libraries.spec import parse_library
-    from ..optimizers import get_optimizer
-    from .names import check_default_names, referenced_names
-
-    given_states, given_inputs = model.state_names, model.input_names
-    if feature_names is not None:
-        names = resolve_names("feature_names", feature_names, n_states + n_inputs, "", one=None)
-        given_states, given_inputs = names[:n_states], names[n_states:]
-    states = resolve_names("state_names", given_states, n_states, "x", one=None)
-    inputs = resolve_names("input_names", given_inputs, n_inputs, "u", one="u")
-    clash = sorted(set(states) & set(inputs))
-    if clash:
-        raise ParameterError(f"state_names and input_names must not share names; both have "
-                             f"{clash}")
-    library = model.feature_library
-    if library is None:
-        library = PolynomialLibrary(degree=2)
-    elif isinstance(library, str):
-        library = parse_library(library)
-    check_default_names(referenced_names(model.constraints, library), states, inputs,
-                        default_states=given_states is None,
-                        default_inputs=given_inputs is None)
-    library = copy.deepcopy(library).fit([*states, *inputs])
-    if model.discrete_time:
-        from .discrete import NextSample
-        method, choice = NextSample(), None
-    else:
-        method = copy.deepcopy(get_differentiation_method(model.differentiation_method))
-        method._validate_params()
-        method, choice = _resolved(method, sample, states)
-    optimizer = copy.deepcopy(get_optimizer(model.optimizer))
-    optimizer._validate_params()
-    if model.constraints is not None and not isinstance(optimizer, PriorOnly):
-        if "constraints" not in optimizer.get_params(deep=False):
-            raise ParameterError(f"constraints need an optimizer that takes them (STLSQ); "
-                                 f"{type(optimizer).__name__} does not")
-        optimizer.set_params(constraints=model.constraints.compile(
-            states, library.get_feature_names()))
-    probe = FOLD_PROBE_ROWS if sample is None else \
-        min(FOLD_PROBE_ROWS, sum(tr.n_samples for tr in sample))
-    return FitSetup(tuple(states), tuple(inputs), Prior(model.prior, states, inputs), library,
-                    optimizer, method, choice, bool(model.discrete_time), probe)
-
-
-def _resolved(method, sample, names):
-    """A data-driven method resolved on the trajectories of ``sample`` that need it, and
-    checked against their sampling (a warning when it is too coarse for the method)."""
-    series = [] if sample is None else [(tr.t, tr.x) for tr in sample if tr.x_dot is None]
-    if not series:  # no data, or measured derivatives: nothing to differentiate
-        return method, None
-    method, choice = method.choose(series) if getattr(method, "data_driven", False) else \
-        (method, None)
-    from ..differentiation.resolution import warn_if_coarse
-    warn_if_coarse(method, *series[0], names)
-    return method, choice
 
 
 def resolve_names(arg: str, given, k: int, stem: str, *, one) -> list[str]:
@@ -311,3 +190,12 @@ def resolve_names(arg: str, given, k: int, stem: str, *, one) -> list[str]:
     if bad or len(set(names)) != len(names):
         raise ShapeError(f"{arg} must be distinct identifiers (letters, digits, _); got {names}")
     return names
+
+
+def sample_rows(differentiation_method) -> int:
+    """Rows read before the set-up is made: what a data-driven ``differentiation_method``
+    (a Differentiator or a spec) looks at, and at least what sizes the cross-validation
+    segments (:data:`FOLD_PROBE_ROWS`)."""
+    method = get_differentiation_method(differentiation_method)
+    own = int(method.sample_rows) if getattr(method, "data_driven", False) else 0
+    return max(own, FOLD_PROBE_ROWS)
