@@ -46,10 +46,12 @@ import test_adversarial_fit
 import test_adversarial_isolated
 import test_adversarial_models
 import test_adversarial_options
+import test_adversarial_public
 
 TABLES = [test_adversarial_fit, test_adversarial_components, test_adversarial_models,
           test_adversarial_files, test_adversarial_cli, test_adversarial_energy_control,
-          test_adversarial_isolated, test_adversarial_estimation, test_adversarial_options]
+          test_adversarial_isolated, test_adversarial_estimation, test_adversarial_options,
+          test_adversarial_public]
 
 
 def test_the_docstring_gives_the_number_of_distinct_rows_per_entry_point():

@@ -40,6 +40,9 @@ NARY_FUNCTIONS: dict[str, tuple[Callable, Callable, str]] = {
 
 def symbol(name: str) -> sp.Symbol:
     """The real symbol used for a variable name everywhere in the package."""
+    if not isinstance(name, str) or not name:
+        from .errors import ParameterError
+        raise ParameterError(f"a variable name must be a non-empty string; got {name!r:.80}")
     return sp.Symbol(name, real=True)
 
 
@@ -164,6 +167,9 @@ def to_data(expr: sp.Expr):
     Nodes: ``["sym", name]``, ``["num", p, q]``, ``["float", value]``, ``["add", ...]``,
     ``["mul", ...]``, ``["pow", base, exponent]``, ``["fn", name, ...]``.
     """
+    if not isinstance(expr, sp.Basic):
+        from .errors import ExportError
+        raise ExportError(f"expr must be a sympy expression; got {type(expr).__name__}")
     if expr.is_Symbol:
         return ["sym", expr.name]
     if expr in CONSTANTS.values():
@@ -312,6 +318,15 @@ def to_casadi(expr: sp.Expr, variables: Mapping[str, object], *, term: str | Non
     from ._optional import require
 
     ca = require("casadi", purpose="exporting to CasADi")
+
+    from .errors import ExportError
+
+    if not isinstance(expr, sp.Basic):
+        raise ExportError(f"expr must be a sympy expression; got {type(expr).__name__}")
+    missing = sorted(s.name for s in expr.free_symbols if s.name not in variables)
+    if missing:
+        raise ExportError(f"{term or expr} uses {missing}, which variables does not give "
+                          f"(it gives {sorted(variables)})")
 
     def build(e):
         if e.is_Symbol:

@@ -4,6 +4,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+import sympy as sp
 
 from .._optional import require
 from ..errors import ParameterError, ShapeError, describe
@@ -18,6 +19,11 @@ def from_equations(states: Sequence, inputs: Sequence, rhs: Sequence) -> ca.Func
     ``states`` / ``inputs`` are sympy symbols (their names are looked up in ``rhs``).
     A term with no symbolic form raises :class:`~discrepancy.errors.ExportError`.
     """
+    for name, symbols in (("states", states), ("inputs", inputs)):
+        if isinstance(symbols, (str, bytes)) or not all(isinstance(s, sp.Symbol)
+                                                        for s in symbols):
+            raise ParameterError(f"{name} must be a sequence of sympy symbols; got "
+                                 f"{symbols!r:.80}")
     if len(rhs) != len(states):
         raise ShapeError(f"rhs must have one expression per state ({len(states)}); got {len(rhs)}")
     x = ca.SX.sym("x", len(states))

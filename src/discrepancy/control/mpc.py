@@ -38,7 +38,7 @@ from .dynamics import as_casadi, rk4_step
 from .limits import Limits
 from .rti import RealTimeIteration
 from .tracking import _diag, tvlqr
-from .trajectory import Plan
+from .trajectory import Plan, check_plan
 
 #: solvers and their default iterations per sample
 SOLVERS = {"ipopt": 100, "rti": 1}
@@ -205,6 +205,7 @@ class MPC:
         (same ``dt``), then hold its final state. Terminal weights: the cost-to-go of the
         TVLQR tracker of ``plan`` on this model with these ``Q``, ``R`` (``tracker``, computed
         if not given), which balances about the plan's end after it."""
+        check_plan(plan)
         if abs(plan.dt - self.dt) > 1e-9 * self.dt:
             raise ParameterError(f"plan.dt must equal the controller's dt {self.dt}; got "
                                  f"{plan.dt}")
@@ -247,6 +248,11 @@ class MPCLaw:
     converged: list = field(default_factory=list)
     _last: MPCSolution | None = None
     _u: np.ndarray | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.mpc, MPC):
+            raise ParameterError(f"mpc must be an MPC; got {type(self.mpc).__name__}")
+        check_plan(self.plan)
 
     def reset(self) -> None:
         """Forget the warm start, the last input and the records (a new run)."""

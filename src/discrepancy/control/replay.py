@@ -107,6 +107,8 @@ def interval_defects(model, plan, *, rtol=1e-12, atol=1e-14) -> np.ndarray:
     """Per-interval integration error of a plan ``(N,)``: max-abs difference between the
     planned ``x[k+1]`` and a tight ODE solve over one interval from the planned ``x[k]``
     with ``u[k]`` held. Unlike a whole replay, these are not amplified by instability."""
+    from .trajectory import check_plan
+    check_plan(plan)
     step = _stepper(model, plan.dt, 1, rtol, atol)
     return np.array([np.max(np.abs(step(plan.x[k], plan.u[k])[-1] - plan.x[k + 1]))
                      for k in range(len(plan.u))])

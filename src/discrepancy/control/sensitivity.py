@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import ShapeError
 from .dynamics import as_casadi, rk4_step
 from .tracking import linearise
-from .trajectory import Plan
+from .trajectory import Plan, check_plan
 
 
 def state_transition(model, plan: Plan) -> np.ndarray:
@@ -35,6 +35,7 @@ def parameter_sensitivity(model, perturbation, plan: Plan) -> np.ndarray:
             e.g. ``[sin(phi1), 0, ...]`` for an error in a ``sin(phi1)`` coefficient.
         plan: the open-loop plan whose held inputs are replayed.
     """
+    check_plan(plan)
     f = as_casadi(model)
     n, r = f.size1_in(0), f.size1_in(1)
     if perturbation.size_out(0) != (n, 1):

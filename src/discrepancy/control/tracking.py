@@ -17,7 +17,7 @@ from scipy.linalg import solve_discrete_are
 
 from ..errors import InfeasibleError, ParameterError, ShapeError, describe
 from .dynamics import as_casadi, rk4_step
-from .trajectory import Plan
+from .trajectory import Plan, check_plan
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,13 @@ class Tracker:
     cost_to_go: np.ndarray | None = None
     final_gain: np.ndarray | None = None
     u_final: np.ndarray | None = None
+
+    def __post_init__(self):
+        check_plan(self.plan)
+        expected = (len(self.plan.u), self.plan.u.shape[1], self.plan.x.shape[1])
+        if np.shape(self.gains) != expected:
+            raise ShapeError(f"gains must be (N, r, n) = {expected} for this plan; got "
+                             f"{describe(self.gains)}")
 
     def __call__(self, k: int, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, dtype=float)
@@ -91,6 +98,7 @@ def step_jacobians(model, dt: float, substeps: int) -> ca.Function:
 
 def linearise(model, plan: Plan):
     """``A (N, n, n)``, ``B (N, n, r)``: Jacobians of the plan's discrete step along the plan."""
+    check_plan(plan)
     jac = step_jacobians(model, plan.dt, plan.substeps)
     n, r = plan.x.shape[1], plan.u.shape[1]
     N = len(plan.u)

@@ -121,6 +121,9 @@ def default_procedures(model: DissipationDiscrepancy, training_seconds: float,
     the most recent half or 30 %: the regime a forecast continues) x cumulative or
     per-block energy loss (blocks of 1/32 of the training part) x terms chosen by the elbow
     of the training error or by forecasting its last 20 %."""
+    if isinstance(training_seconds, bool) or not isinstance(training_seconds, (int, float, np.number)) \
+            or not 0 < training_seconds < np.inf:
+        raise ParameterError(f"training_seconds must be a positive number; got {training_seconds!r}")
     if libraries is None:
         terms = model._terms(n_positions)
         libraries = {"full library": terms, "no Stribeck": without_stribeck(terms)}

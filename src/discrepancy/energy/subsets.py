@@ -19,6 +19,7 @@ from math import comb
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
+from ..data.validation import check_array
 from ..errors import ParameterError
 from .regression import statistics
 from .soundness import Limits
@@ -79,6 +80,8 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     Returns ``(support, candidates)`` with ``candidates`` the sorted ``(score, support)``
     list; ``support`` is empty when no law fits with positive coefficients.
     """
+    features = check_array("features", features, allow_1d=True)
+    delta_h = check_array("delta_h", delta_h, ndim=1, n_rows=features.shape[0])
     m, p = features.shape
     if not isinstance(max_terms, (int, np.integer)) or max_terms < 1:
         raise ParameterError(f"max_terms must be an integer >= 1; got {max_terms!r}")
