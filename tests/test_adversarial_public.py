@@ -8,16 +8,24 @@ import pickle
 import casadi as ca
 import matplotlib
 import numpy as np
+import pytest
 import sympy as sp
 
 import discrepancy as dc
 from adversarial import Case, check, circle, fast, params, raises, returns
-from discrepancy import control, data, differentiation, energy, estimation, libraries, metrics
-from discrepancy import optimizers, selection, symbolic, systems
-from test_adversarial_energy_control import DQ, Q, SOL, dissipation, state_form
-from test_adversarial_energy_control import FITTED as DISSIPATION
-from test_adversarial_energy_control import T as ET
-from test_adversarial_estimation import RUN as EKF_RUN
+from discrepancy import (
+    control,
+    data,
+    differentiation,
+    energy,
+    estimation,
+    libraries,
+    metrics,
+    optimizers,
+    selection,
+    symbolic,
+    systems,
+)
 from discrepancy.errors import (
     DataError,
     DiscrepancyError,
@@ -26,11 +34,13 @@ from discrepancy.errors import (
     ParameterError,
     ShapeError,
 )
-
-matplotlib.use("Agg")
-from discrepancy.plots import selection as selection_plots  # noqa: E402
-from discrepancy.plots import trajectories as trajectory_plots  # noqa: E402
-from discrepancy.plots import uncertainty as uncertainty_plots  # noqa: E402
+from discrepancy.plots import selection as selection_plots
+from discrepancy.plots import trajectories as trajectory_plots
+from discrepancy.plots import uncertainty as uncertainty_plots
+from test_adversarial_energy_control import DQ, SOL, Q, dissipation, state_form
+from test_adversarial_energy_control import FITTED as DISSIPATION
+from test_adversarial_energy_control import T as ET
+from test_adversarial_estimation import RUN as EKF_RUN
 
 NAN = np.nan
 X1 = symbolic.symbol("x1")
@@ -75,7 +85,12 @@ def equal(expected, **tol):
 
 
 def is_figure(value):
-    return isinstance(value, matplotlib.figure.Figure)
+    """A matplotlib figure (closed once checked)."""
+    import matplotlib.pyplot as plt
+
+    drawn = isinstance(value, matplotlib.figure.Figure) and len(value.axes) > 0
+    plt.close(value)
+    return drawn
 
 
 CASES = [
@@ -142,7 +157,7 @@ CASES = [
     Case("energy", "choose_smoothing negative window", lambda: energy.choose_smoothing(H, np.c_[np.sin(T)], T, windows=(-3,)), raises(DataError, r"too short for any smoothing window of \[-3\]")),
     Case("energy", "support_loss_terms not callable", lambda: energy.support_loss_terms(3, ["q", "dq"]), raises(ParameterError, r"pivot_force must be a callable")),
     Case("energy", "FrictionTerm power a text", lambda: energy.FrictionTerm("a", "x**2", "W", "N m"), raises(ParameterError, r"FrictionTerm 'a': power must be a sympy expression; got str")),
-    Case("energy", "default_procedures negative seconds", lambda: energy.default_procedures(dc.DissipationDiscrepancy(energy=H), -1.0, 3), raises(ParameterError, r"training_seconds must be a positive number; got -1.0")),
+    Case("energy", "default_procedures negative seconds", lambda: energy.default_procedures(dc.DissipationDiscrepancy(energy=H), -1.0, 3), raises(ParameterError, r"training_seconds must be a finite number > 0; got -1.0")),
     Case("energy", "default_procedures numpy positions", lambda: len(energy.default_procedures(dc.DissipationDiscrepancy(energy=H), 10.0, np.int64(3))), returns(lambda n: n > 0)),
 ] + [
     # control's building blocks (a double integrator x1' = x2, x2' = u)
@@ -192,6 +207,7 @@ CASES = [
     Case("pde", "ZarrSource missing file", lambda: dc.ZarrSource(["missing.zarr"]), raises(DiscrepancyError, r"missing.zarr")),
     Case("stream", "Chunk rows differ", lambda: fast().fit([dc.Chunk(X[:50], t=T[:40])]), raises(DiscrepancyError, r"t")),
     Case("pde", "PDEDiscrepancyModel prior of a text", lambda: dc.PDEDiscrepancyModel(prior="u_xx").fit(*heat_field(), grid=GRID), raises(DiscrepancyError, r"prior")),
+    Case("pde", "PDEDiscrepancyModel stores numpy-free arguments", lambda: dc.PDEDiscrepancyModel(prior=[0.1 * U_XX], field_names=("u",)), returns(lambda m: m.field_names == ("u",) and m.prior == [0.1 * U_XX])),
     Case("pde", "PDEDiscrepancyModel.fit without grid", lambda: dc.PDEDiscrepancyModel(prior=[0.1 * U_XX]).fit(heat_field()[0], 0.05, grid=None), raises(DiscrepancyError, r"grid")),
     Case("pde", "PDEDiscrepancyModel.fit NaN field", lambda: dc.PDEDiscrepancyModel(prior=[0.1 * U_XX]).fit(heat_field()[0] * NAN, 0.05, grid=GRID), raises(DataError, r"finite")),
     Case("pde", "PDEDiscrepancyModel.prior_only of a number", lambda: dc.PDEDiscrepancyModel.prior_only(3, GRID), raises(DiscrepancyError, r"prior")),
@@ -249,46 +265,48 @@ CASES = [
     Case("energy", "resampled_predictions of a text", lambda: DISSIPATION.resampled_predictions(Q, ET, "unc", dq=DQ), raises(ParameterError, r"uncertainty must be this model's bootstrap")),
     Case("energy", "DissipationDiscrepancy stores numpy arguments", lambda: dc.DissipationDiscrepancy(energy=H, max_terms=np.int64(2)), returns(lambda m: m.max_terms == 2 and m.energy is H)),
     Case("energy", "EnergyDiscrepancy stores its energy", lambda: dc.EnergyDiscrepancy(energy=H), returns(lambda m: m.energy is H)),
-    Case("energy", "PreparedRecording of odd columns", lambda: energy.PreparedRecording(H, np.ones((5, 3)), ET[:5], (), ["q", "dq", "x"]), raises(ShapeError, r"x")),
-    Case("energy", "PreparedRecording.window_start past the end", lambda: DISSIPATION.prepare(SOL, ET).window_start(10 ** 6, None), raises(ParameterError, r"stop")),
-    Case("energy", "BlindFit.forecast_band lengths differ", lambda: BLIND.forecast_band(np.zeros(10), ET[:5]), raises(ShapeError, r"t|prediction")),
+    Case("energy", "PreparedRecording of odd columns", lambda: energy.PreparedRecording(H, np.ones((5, 3)), ET[:5], (), ["q", "dq", "x"]), raises(ShapeError, r"x must hold positions then velocities \(m, 2k\)")),
+    Case("energy", "PreparedRecording.window_start past the end", lambda: DISSIPATION.prepare(SOL, ET).window_start(10 ** 6, 1.0), raises(ParameterError, r"stop must be a sample count in \[1, 2000\]; got 1000000")),
+    Case("energy", "PreparedRecording.window_start the last second", lambda: DISSIPATION.prepare(SOL, ET).window_start(np.int64(2000), 1.0), returns(lambda k: ET[k] == pytest.approx(ET[-1] - 1.0))),
+    Case("energy", "BlindFit.forecast_band lengths differ", lambda: BLIND.forecast_band(np.zeros(10), ET[:5]), raises(ShapeError, r"prediction must have 5 rows")),
+    Case("energy", "BlindFit.forecast_band empty", lambda: BLIND.forecast_band(np.zeros(0), np.zeros(0)), raises(ShapeError, r"t must hold at least one time")),
     Case("energy", "BlindFit.restricted unknown name", lambda: BLIND.restricted(["bogus"]), raises(ParameterError, r"bogus")),
-    Case("energy", "DissipationUncertainty.interval level 2", lambda: UNCERTAINTY.interval(2.0), raises(ParameterError, r"level")),
-    Case("energy", "DissipationUncertainty.curves features of another width", lambda: UNCERTAINTY.curves(np.ones((5, 7)), continued=False), raises(ShapeError, r"features")),
-    Case("energy", "DissipationUncertainty.table negative precision", lambda: UNCERTAINTY.table(precision=-1), raises(ParameterError, r"precision")),
+    Case("energy", "DissipationUncertainty.interval level 2", lambda: UNCERTAINTY.interval(2.0), raises(ParameterError, r"level must be .*got 2.0")),
+    Case("energy", "DissipationUncertainty.curves features of another width", lambda: UNCERTAINTY.curves(np.ones((5, 7)), continued=False), raises(ShapeError, r"features must have 1 columns; got shape \(5, 7\)")),
+    Case("energy", "DissipationUncertainty.table negative precision", lambda: UNCERTAINTY.table(precision=-1), raises(ParameterError, r"precision must be .*got -1")),
     # records' methods
-    Case("estimation", "FilterResult.state past the end", lambda: FILTERED.state(10 ** 6), raises(ParameterError, r"i")),
+    Case("estimation", "FilterResult.state past the end", lambda: FILTERED.state(10 ** 6), raises(ParameterError, r"i must be a sample index in \[-100, 100\); got 1000000")),
     Case("estimation", "FilterResult.state numpy index", lambda: FILTERED.state(np.int64(0)).x, returns(equal([0.0, 1.0]))),
     Case("estimation", "FilterResult.normalised_innovations_squared", lambda: FILTERED.normalised_innovations_squared(), returns(lambda v: v.shape == (100,) and np.all(v >= 0))),
-    Case("control", "Attempt.coefficients of a model", lambda: control.Attempt(FITTED, None).coefficients() if False else control.Attempt(learned=FITTED, run=None).coefficients(), returns(lambda c: isinstance(c, dict))),
-    Case("control", "ClosedLoopRun.measured_trajectories until NaN", lambda: LOOP.measured_trajectories(until=NAN), raises(ParameterError, r"until")),
-    Case("control", "ClosedLoopRun.first_exit of a text", lambda: LOOP.first_exit("limits"), raises(ParameterError, r"limits")),
+    Case("control", "Attempt.coefficients of a model", lambda: control.Attempt(1, False, FITTED, None, FITTED).coefficients(), returns(lambda c: c.keys() == {"x1", "x2"} and c["x1"] == pytest.approx({"x2": 1.0}) and c["x2"] == pytest.approx({"x1": -1.0}))),
+    Case("control", "ClosedLoopRun.measured_trajectories until NaN", lambda: LOOP.measured_trajectories(until=NAN), raises(ParameterError, r"until must be a time \(s\) or None; got nan")),
+    Case("control", "ClosedLoopRun.first_exit of a text", lambda: LOOP.first_exit("limits"), raises(ParameterError, r"limits must be a Limits; got str")),
     Case("control", "ClosedLoopRun.control_log holds the steps", lambda: len(LOOP.control_log()), returns(lambda n: n == 3)),
     Case("selection", "ForecastSelection.improvement", lambda: CHOSEN.forecast_selection_.improvement(), returns(lambda v: np.isfinite(v))),
     Case("selection", "ProcedureChoice.table", lambda: PROCEDURE.table(), returns(lambda text: "prior alone" in text)),
     Case("selection", "choose_procedure zero origins", lambda: dc.choose_procedure(fast(), X, T, n_origins=0), raises(ParameterError, r"n_origins")),
     Case("selection", "choose_procedure numpy origins", lambda: dc.choose_procedure(dc.DiscrepancyModel(prior=lambda x, u: np.c_[x[:, 1], -x[:, 0]]), X, T, n_origins=np.int64(2), candidates={"linear": dc.PolynomialLibrary(1)}, progress=False).chosen, returns(lambda name: name == "prior alone")),
-    Case("stream", "Chunk.rows past the end", lambda: dc.Chunk(X[:5], t=T[:5]).rows(10, 20), raises(ParameterError, r"start")),
+    Case("stream", "Chunk.rows past the end", lambda: dc.Chunk(X[:5], t=T[:5]).rows(10, 20), raises(ParameterError, r"start and stop must be row numbers up to 5")),
     Case("stream", "Chunk.rows numpy bounds", lambda: dc.Chunk(X[:5], t=T[:5]).rows(np.int64(1), np.int64(3)).x, returns(equal(X[1:3]))),
     # PDE components
     Case("pde", "PDELibrary negative derivative order", lambda: dc.PDELibrary(derivative_order=-1).fit(np.ones((5, 1))), raises(ParameterError, r"derivative_order")),
     Case("pde", "FieldWeakForm negative widths", lambda: dc.FieldWeakForm(widths=[-3]), returns(lambda m: m.widths == [-3])),
-    Case("pde", "SpatialFiniteDifference order 0", lambda: dc.SpatialFiniteDifference(order=0).derivative(np.ones(8), 0.1, 1), raises(ParameterError, r"order")),
-    Case("pde", "SpatialSavitzkyGolay even window", lambda: dc.SpatialSavitzkyGolay(window_length=8).derivative(np.ones(20), 0.1, 1), raises(ParameterError, r"window_length")),
-    Case("pde", "SpatialSpectral negative cutoff", lambda: dc.SpatialSpectral(cutoff=-1.0).derivative(np.ones(16), 0.1, 1), raises(ParameterError, r"cutoff")),
-    Case("pde", "SpatialSpectral derivative of a sine", lambda: dc.SpatialSpectral().derivative(np.sin(GRID.coordinates[0]), GRID.coordinates[0][1], 1), returns(equal(np.cos(GRID.coordinates[0]), atol=1e-8))),
+    Case("pde", "SpatialFiniteDifference order 0", lambda: dc.SpatialFiniteDifference(order=0).derivative(np.ones(8), 0, 1, 0.1, False), raises(ParameterError, r"order")),
+    Case("pde", "SpatialSavitzkyGolay even window", lambda: dc.SpatialSavitzkyGolay(window_length=8).derivative(np.ones(20), 0, 1, 0.1, False), raises(ParameterError, r"window_length")),
+    Case("pde", "SpatialSpectral negative cutoff", lambda: dc.SpatialSpectral(cutoff=-1.0).derivative(np.ones(16), 0, 1, 0.1, True), raises(ParameterError, r"cutoff")),
+    Case("pde", "SpatialSpectral derivative of a sine", lambda: dc.SpatialSpectral().derivative(np.sin(GRID.coordinates[0]), 0, 1, GRID.coordinates[0][1], True), returns(equal(np.cos(GRID.coordinates[0]), atol=1e-8))),
     Case("optimizer", "PriorOnly learns nothing", lambda: dc.PriorOnly().fit(FEATURES, FEATURES[:, :1]).coef_, returns(lambda c: np.all(c == 0))),
     Case("optimizer", "PriorOnly of a text", lambda: dc.PriorOnly().fit("theta", FEATURES[:, :1]), raises(ShapeError, r"")),
     # DiscrepancyModel methods no other table reaches
     Case("model", "check_is_fitted unfitted", lambda: fast().check_is_fitted(), raises(NotFittedError, r"not fitted")),
     Case("model", "from_prior of a number", lambda: dc.DiscrepancyModel.from_prior(3), raises(DiscrepancyError, r"prior")),
-    Case("model", "from_prior a decay simulates exp(-t)", lambda: dc.DiscrepancyModel.from_prior(lambda x, u: -x).simulate([1.0], np.linspace(0, 1, 11))[-1, 0], returns(equal(np.exp(-1.0), rtol=1e-5))),
+    Case("model", "from_prior a decay simulates exp(-t)", lambda: dc.DiscrepancyModel.from_prior(lambda x, u: -x, state_names=["x"]).simulate([1.0], np.linspace(0, 1, 11))[-1, 0], returns(equal(np.exp(-1.0), rtol=1e-5))),
     Case("model", "get_feature_names unfitted", lambda: fast().get_feature_names(), raises(NotFittedError, r"not fitted")),
     Case("model", "get_feature_names of a linear library", lambda: FITTED.get_feature_names(), returns(lambda names: list(names) == ["1", "x1", "x2"])),
     Case("model", "get_params numpy argument kept", lambda: fast(feature_library=dc.PolynomialLibrary(np.int64(2))).get_params()["feature_library__degree"], returns(lambda d: d == 2)),
     Case("model", "set_params unknown", lambda: fast().set_params(bogus=1), raises(ParameterError, r"DiscrepancyModel has no parameter 'bogus'")),
     Case("model", "set_params a bad value", lambda: fast().set_params(selection="bogus").fit(X, T), raises(ParameterError, r"selection")),
-    Case("model", "residual of a text", lambda: FITTED.residual("trajectory"), raises(DiscrepancyError, r"trajectory")),
+    Case("model", "residual of a text", lambda: FITTED.residual("trajectory"), raises(ParameterError, r"trajectory must be a Trajectory .*got 'trajectory'")),
     Case("model", "residual of the training data", lambda: FITTED.residual(data.as_trajectories(X, T, x_dot=XD)[0])[1], returns(equal(XD))),
     Case("model", "to_state unfitted", lambda: fast().to_state(), raises(NotFittedError, r"not fitted")),
     Case("model", "to_state round trip", lambda: dc.DiscrepancyModel.from_state(FITTED.to_state()).coefficients(), returns(equal(FITTED.coefficients()))),

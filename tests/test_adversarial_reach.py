@@ -24,7 +24,8 @@ def _reach_all(tmp_path, monkeypatch) -> dict[str, str | None]:
             continue
         if hasattr(table, "PRELUDE"):   # rows run in a child process
             results = run_isolated(table.PRELUDE, missing, cwd=tmp_path)
-            runs = [lambda case=case: check_isolated(case, results) for case in missing]
+            runs = [lambda case=case, results=results: check_isolated(case, results)
+                    for case in missing]
         else:
             runs = [lambda case=case: check(case) for case in missing]
         for run in runs:

@@ -9,6 +9,7 @@ import numpy as np
 from ..data.validation import as_float_array
 from ..errors import ParameterError, ShapeError, describe
 
+
 def _table(name: str, a, m: int, n: int) -> np.ndarray:
     """``a`` as an ``(m, n)`` float array (non-finite values allowed: a diverged run plots)."""
     arr = as_float_array(name, a)
