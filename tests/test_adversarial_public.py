@@ -74,6 +74,33 @@ PROCEDURE = dc.choose_procedure(dc.DiscrepancyModel(prior=lambda x, u: np.c_[x[:
                                 progress=False)
 
 
+DECAY = ca.Function("g", [_x, _u], [-_x])
+MPC_DOUBLE = control.MPC(DOUBLE, horizon=5, dt=0.1, Q=[1, 1], R=[1])
+MAP_U = np.sin(0.3 * np.arange(60))[:, None]
+
+
+def iterate_map(x0, steps, u=MAP_U):
+    """``x[k+1] = 0.9 x[k] + 0.5 u[k]`` by hand, ``steps`` values from ``x0``."""
+    out = [x0]
+    for k in range(steps - 1):
+        out.append(0.9 * out[-1] + 0.5 * u[k, 0])
+    return np.array(out)
+
+
+def map_model():
+    return dc.DiscrepancyModel(discrete_time=True, feature_library=dc.PolynomialLibrary(1),
+                               optimizer=dc.STLSQ(threshold=0.01))
+
+
+def reloaded(model):
+    model.save("map.json")
+    return dc.load_model("map.json")
+
+
+MAP_X = iterate_map(1.0, 60)[:, None]
+MAP = map_model().fit(MAP_X, 1.0, u=MAP_U)
+
+
 def heat_field(m=21):
     """The heat equation u_t = 0.1 u_xx from sin(x): u = exp(-0.1 t) sin(x), exact."""
     t = np.arange(m) * 0.05
@@ -179,6 +206,38 @@ CASES = [
     Case("control", "Tracker gains of a wrong shape", lambda: control.Tracker(PLAN, np.ones(3)), raises(ShapeError, r"gains must be \(N, r, n\) = \(10, 1, 2\) for this plan")),
     Case("control", "MPC.follow a text", lambda: control.MPC(DOUBLE, horizon=5, dt=0.1, Q=[1, 1], R=[1]).follow("plan"), raises(DiscrepancyError, r"plan")),
     Case("control", "MPCLaw of a text", lambda: control.MPCLaw("mpc", PLAN, None), raises(ParameterError, r"mpc must be an MPC; got str")),
+    Case("control", "rk4_step NaN step", lambda: control.rk4_step(DOUBLE, NAN, 1), raises(ParameterError, r"dt must be a finite step > 0 \(s\); got nan")),
+    Case("control", "rk4_step negative step", lambda: control.rk4_step(DOUBLE, -0.1, 1), raises(ParameterError, r"dt must be a finite step > 0 \(s\); got -0.1")),
+    Case("control", "rk4_step of a text", lambda: control.rk4_step("f", 0.1, 1), raises(ParameterError, r"f must be a casadi.Function")),
+    Case("control", "rk4_step numpy substeps on x' = -x", lambda: float(control.rk4_step(DECAY, 0.1, np.int64(4))([1.0, 1.0], [0.0])[0]), returns(equal(np.exp(-0.1), rtol=1e-7))),
+    Case("control", "stationary_lqr zero step", lambda: control.stationary_lqr(DOUBLE, [0, 0], [0], dt=0.0, substeps=1, Q=[1, 1], R=[1]), raises(ParameterError, r"dt must be a finite step > 0")),
+    Case("control", "stationary_lqr equilibrium of another size", lambda: control.stationary_lqr(DOUBLE, [0, 0, 0], [0], dt=0.1, substeps=1, Q=[1, 1], R=[1]), raises(ShapeError, r"x_eq must be 2 numbers")),
+    Case("control", "stationary_lqr NaN weight", lambda: control.stationary_lqr(DOUBLE, [0, 0], [0], dt=0.1, substeps=1, Q=[NAN, 1], R=[1]), raises(ParameterError, r"Q must be finite weights")),
+    Case("control", "stationary_lqr against scipy", lambda: control.stationary_lqr(DECAY, [0, 0], [0], dt=0.1, substeps=np.int64(2), Q=[1, 1], R=[1])[1], returns(equal(np.eye(2) / (1 - float(control.rk4_step(DECAY, 0.1, 2)([1.0, 0.0], [0.0])[0]) ** 2)))),
+    Case("control", "swing_up_errors of a text", lambda: control.swing_up_errors("x", angles=[0], rates=[1]), raises(ShapeError, r"x_final must be a numeric array")),
+    Case("control", "swing_up_errors negative tolerance", lambda: control.swing_up_errors(np.zeros(2), angles=[0], rates=[1], angle_tol=-1), raises(ParameterError, r"angle_tol must be a finite number > 0; got -1")),
+    Case("control", "swing_up_errors wraps the angle", lambda: control.swing_up_errors(np.array([2 * np.pi + 0.01, 0.1]), angles=[0], rates=[1]), returns(lambda e: e["angle_0"] == pytest.approx(0.01) and e["success"])),
+    Case("control", "MPC.solve NaN state", lambda: MPC_DOUBLE.solve([NAN, 0], np.zeros((6, 2)), np.zeros((5, 1))), raises(DataError, r"x must be finite")),
+    Case("control", "MPC.solve negative terminal weight", lambda: MPC_DOUBLE.solve([0, 0], np.zeros((6, 2)), np.zeros((5, 1)), P=-np.eye(2)), raises(ParameterError, r"P must be positive semidefinite")),
+    Case("control", "MPC.solve u_prev a text", lambda: MPC_DOUBLE.solve([0, 0], np.zeros((6, 2)), np.zeros((5, 1)), u_prev="a"), raises(ShapeError, r"u_prev must be a numeric array")),
+    Case("control", "MPC.solve at rest stays at rest", lambda: MPC_DOUBLE.solve([0, 0], np.zeros((6, 2)), np.zeros((5, 1))).u, returns(equal(np.zeros((5, 1)), atol=1e-8))),
+    Case("control", "replay a text law", lambda: control.replay(DOUBLE, [0, 0], np.arange(4) * 0.1, "law"), raises(ShapeError, r"law must be a numeric array")),
+    Case("control", "tvlqr bounds reversed", lambda: control.tvlqr(DOUBLE, PLAN, Q=[1, 1], R=[1], u_bounds=[[1, -1]]), raises(ShapeError, r"u_bounds must be \(1, 2\) rows of \(lower, upper\) with lower <= upper")),
+    Case("control", "interval_defects negative rtol", lambda: control.interval_defects(DOUBLE, PLAN, rtol=-1), raises(ParameterError, r"rtol must be a finite number > 0 and <= 1; got -1")),
+    Case("control", "parameter_sensitivity a text perturbation", lambda: control.parameter_sensitivity(DOUBLE, "p", PLAN), raises(ParameterError, r"perturbation must be a casadi.Function \(x, u\) -> \(2, 1\); got str")),
+    Case("control", "learn_by_attempts a text attempt", lambda: control.learn_by_attempts("a", control.DiscrepancyUpdater(fast()), first=None), raises(ParameterError, r"attempt must be a callable")),
+    Case("control", "state_transition of x' = -x", lambda: control.state_transition(DECAY, PLAN), returns(equal(np.eye(2) * np.exp(-1.0), rtol=1e-6))),
+    Case("control", "linearise a text model", lambda: control.linearise("m", PLAN), raises(ParameterError, r"model must be a casadi.Function")),
+    # discrete-time maps (x[k+1] = 0.9 x[k] + 0.5 u[k]) against iterating the map by hand
+    Case("model", "discrete simulate iterates the map", lambda: MAP.simulate([1.0], np.arange(6.0), u=MAP_U[:6])[:, 0], returns(equal(iterate_map(1.0, 6)))),
+    Case("model", "discrete predict is one step", lambda: MAP.predict(MAP_X[:3], u=MAP_U[:3])[:, 0], returns(equal(0.9 * MAP_X[:3, 0] + 0.5 * MAP_U[:3, 0]))),
+    Case("model", "discrete refine refused", lambda: MAP.refine(MAP_X, 1.0, u=MAP_U), raises(ParameterError, r"refine simulates continuous-time models.*discrete_time=True")),
+    Case("model", "discrete fit_outputs refused", lambda: map_model().fit_outputs(MAP_X, 1.0, u=MAP_U, outputs=["x1"]), raises(ParameterError, r"fit_outputs simulates continuous-time models")),
+    Case("model", "discrete estimate_initial_state refused", lambda: MAP.estimate_initial_state(MAP_X[:10], 1.0, u=MAP_U[:10], outputs=["x1"]), raises(ParameterError, r"estimate_initial_state simulates continuous-time models")),
+    Case("model", "discrete fit_prediction_error refused", lambda: map_model().fit_prediction_error(MAP_X, 1.0, u=MAP_U, outputs=["x1"]), raises(ParameterError, r"fit_prediction_error fits continuous-time models")),
+    Case("model", "discrete differentiate refused", lambda: MAP.differentiate(MAP_X, 1.0), raises(ParameterError, r"a discrete-time model has no derivatives")),
+    Case("model", "discrete save and load iterates the map", lambda: reloaded(MAP).simulate([1.0], np.arange(6.0), u=MAP_U[:6])[:, 0], returns(equal(iterate_map(1.0, 6)))),
+    Case("model", "discrete from_prior simulates the map", lambda: dc.DiscrepancyModel.from_prior(lambda x, u: 0.5 * x, state_names=["x"], discrete_time=True).simulate([8.0], np.arange(4.0))[:, 0], returns(equal([8.0, 4.0, 2.0, 1.0]))),
     # systems
     Case("systems", "DoublePendulum of a text", lambda: systems.DoublePendulum("params").rhs(np.zeros((1, 4)), None), raises(ParameterError, r"params must be DoublePendulumParameters; got str")),
     Case("systems", "DoublePendulumParameters negative mass", lambda: systems.DoublePendulumParameters(m1=-1.0), raises(ParameterError, r"m1")),
@@ -341,5 +400,6 @@ def nested(depth):
 
 
 @params(CASES)
-def test_case(case):
+def test_case(case, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)   # rows that save a model write in a fresh folder
     check(case)

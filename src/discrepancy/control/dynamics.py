@@ -66,6 +66,12 @@ def rk4_step(f: ca.Function, dt: float, substeps: int) -> ca.Function:
             not 1 <= substeps <= 1000:
         raise ParameterError(f"substeps must be an integer in [1, 1000]; got {substeps!r}")
     substeps = int(substeps)
+    if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, (int, float, np.number)) \
+            or not 0 < dt < np.inf:
+        raise ParameterError(f"dt must be a finite step > 0 (s); got {dt!r}")
+    if not isinstance(f, ca.Function):
+        raise ParameterError(f"f must be a casadi.Function f(x, u) -> xdot (see as_casadi); "
+                             f"got {describe(f)}")
     n, r = f.size1_in(0), f.size1_in(1)
     x0 = ca.SX.sym("x", n)
     u = ca.SX.sym("u", r)

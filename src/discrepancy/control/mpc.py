@@ -33,6 +33,7 @@ import casadi as ca
 import numpy as np
 
 from ..constraints import Integral, Interval, Options, Real, validate_params
+from ..data.validation import as_float_array, check_finite, check_vector
 from ..errors import ParameterError, ShapeError
 from .dynamics import as_casadi, rk4_step
 from .limits import Limits
@@ -158,11 +159,12 @@ class MPC:
         if x_ref.shape != (N + 1, n) or u_ref.shape != (N, r):
             raise ShapeError(f"x_ref must be ({N + 1}, {n}) and u_ref ({N}, {r}); got "
                              f"{x_ref.shape} and {u_ref.shape}")
-        u_prev = np.zeros(r) if u_prev is None else np.asarray(u_prev, dtype=float).ravel()
-        P = self.Q if P is None else P
-        x = np.asarray(x, dtype=float).ravel()
+        u_prev = np.zeros(r) if u_prev is None else check_vector("u_prev", u_prev, r)
+        P = self.Q if P is None else _diag("P", P, n)
+        x = as_float_array("x", x).ravel()
         if x.shape != (n,):
             raise ShapeError(f"x must be the measured state ({n},); got shape {x.shape}")
+        check_finite("x", x)
         if warm is None or not (np.all(np.isfinite(warm.x)) and np.all(np.isfinite(warm.u))) \
                 or (self.solver == "rti" and not warm.success):
             xg, ug = x_ref.T, u_ref.T       # no warm start from a failed or diverged solve

@@ -15,6 +15,7 @@ import casadi as ca
 import numpy as np
 from scipy.linalg import solve_discrete_are
 
+from ..data.validation import as_float_array, check_vector
 from ..errors import InfeasibleError, ParameterError, ShapeError, describe
 from .dynamics import as_casadi, rk4_step
 from .trajectory import Plan, check_plan
@@ -113,7 +114,10 @@ def stationary_lqr(model, x_eq, u_eq, *, dt: float, substeps: int, Q, R):
     held-input step of ``model``; ``(None, None)`` if the Riccati equation has no
     stabilising solution there (e.g. not an equilibrium one can stabilise). ``Q``, ``R``:
     weights as :class:`~.mpc.MPC` takes them (numbers, diagonals or matrices, >= 0)."""
-    A, B = (np.array(m) for m in step_jacobians(model, dt, substeps)(x_eq, u_eq))
+    jacobians = step_jacobians(model, dt, substeps)
+    x_eq = check_vector("x_eq", x_eq, jacobians.size1_in(0))
+    u_eq = check_vector("u_eq", u_eq, jacobians.size1_in(1))
+    A, B = (np.array(m) for m in jacobians(x_eq, u_eq))
     Q, R = _diag("Q", Q, A.shape[0]), _diag("R", R, B.shape[1])
     try:
         P = solve_discrete_are(A, B, Q, R)
@@ -163,6 +167,11 @@ def tvlqr(model, plan: Plan, *, Q=None, R=1.0, Q_final=None, u_bounds=None,
         P = Qm + a.T @ P @ (a - b @ K)
         P = (P + P.T) / 2
         gains[k], costs[k] = K, P
-    bounds = None if u_bounds is None else np.asarray(u_bounds, dtype=float).reshape(r, 2)
+    bounds = None if u_bounds is None else as_float_array("u_bounds", u_bounds)
+    if bounds is not None and (bounds.size != 2 * r or np.isnan(bounds).any()
+                               or np.any(bounds.reshape(r, 2)[:, 0] > bounds.reshape(r, 2)[:, 1])):
+        raise ShapeError(f"u_bounds must be ({r}, 2) rows of (lower, upper) with lower <= upper; "
+                         f"got {describe(u_bounds)}")
+    bounds = None if bounds is None else bounds.reshape(r, 2)
     return Tracker(plan=plan, gains=gains, u_bounds=bounds, cost_to_go=costs,
                    final_gain=K_inf, u_final=uf)
