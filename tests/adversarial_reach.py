@@ -99,12 +99,8 @@ def _index(found: dict[str, object]) -> tuple[dict, dict]:
     return functions, classes
 
 
-def _call_record(frame) -> tuple[str, str, str | None] | None:
-    """(file, qualname, class of self/cls or None) of a call made by test code, or None."""
-    caller = frame.f_back
-    if caller is None or not caller.f_code.co_filename.startswith(TESTS) \
-            or frame.f_code.co_filename.startswith(TESTS):
-        return None
+def _record(frame) -> tuple[str, str, str | None]:
+    """(file, qualname, class of self/cls or None) of the call that opened ``frame``."""
     code = frame.f_code
     owner = None
     if code.co_argcount and code.co_varnames[0] in ("self", "cls"):
@@ -112,6 +108,15 @@ def _call_record(frame) -> tuple[str, str, str | None] | None:
         kind = bound if isinstance(bound, type) else type(bound)
         owner = f"{kind.__module__}.{kind.__qualname__}"
     return code.co_filename, code.co_qualname, owner
+
+
+def _call_record(frame) -> tuple[str, str, str | None] | None:
+    """The :func:`_record` of a call test code made to the library, or None."""
+    caller = frame.f_back
+    if caller is None or not caller.f_code.co_filename.startswith(TESTS) \
+            or frame.f_code.co_filename.startswith(TESTS):
+        return None
+    return _record(frame)
 
 
 def name_of(record, found, found_index) -> str | None:
@@ -147,19 +152,13 @@ def watch(records: list):
 
 #: the same hook for a child process (``adversarial.run_isolated``): records the calls the
 #: row's own code (``row N``) and the child's prelude (``<string>``) make, in ``_calls``
-CHILD_HOOK = '''
+CHILD_HOOK = inspect.getsource(_record) + '''
 _calls = []
 def _hook(frame, event, _arg):
     caller = frame.f_back
     if event == "call" and caller is not None and frame.f_code.co_filename[:1] == "/" \\
             and caller.f_code.co_filename[:4] in ("row ", "<str"):
-        code = frame.f_code
-        owner = None
-        if code.co_argcount and code.co_varnames[0] in ("self", "cls"):
-            bound = frame.f_locals.get(code.co_varnames[0])
-            kind = bound if isinstance(bound, type) else type(bound)
-            owner = f"{kind.__module__}.{kind.__qualname__}"
-        _calls.append((code.co_filename, code.co_qualname, owner))
+        _calls.append(_record(frame))
 '''
 
 

@@ -46,6 +46,17 @@ def symbol(name: str) -> sp.Symbol:
     return sp.Symbol(name, real=True)
 
 
+def _check_expression(expr, names, label: str, type_error: type, name_error: type) -> None:
+    """``type_error`` unless ``expr`` is a sympy expression, ``name_error`` if it uses a
+    symbol that is not one of ``names``; ``label`` names the argument."""
+    if not isinstance(expr, sp.Basic):
+        raise type_error(f"{label} must be a sympy expression; got {type(expr).__name__}")
+    unknown = sorted(s.name for s in expr.free_symbols if s.name not in names)
+    if unknown:
+        raise name_error(f"{label} = {expr} uses {unknown}, which are not among the "
+                         f"variables {list(names)}")
+
+
 def adopt(expr, names: Sequence[str], *, label: str) -> sp.Expr:
     """``expr`` with its symbols replaced by the package's real symbols of the same names.
 
@@ -56,12 +67,7 @@ def adopt(expr, names: Sequence[str], *, label: str) -> sp.Expr:
 
     if isinstance(expr, (int, float)) and not isinstance(expr, bool):
         expr = sp.Float(expr) if isinstance(expr, float) else sp.Integer(expr)
-    if not isinstance(expr, sp.Basic):
-        raise ParameterError(f"{label} must be a sympy expression; got {type(expr).__name__}")
-    unknown = sorted(s.name for s in expr.free_symbols if s.name not in names)
-    if unknown:
-        raise UnknownNameError(f"{label} = {expr} uses {unknown}, which are not among the "
-                               f"variables {list(names)}")
+    _check_expression(expr, names, label, ParameterError, UnknownNameError)
     return expr.xreplace({s: symbol(s.name) for s in expr.free_symbols})
 
 
@@ -321,12 +327,7 @@ def to_casadi(expr: sp.Expr, variables: Mapping[str, object], *, term: str | Non
 
     from .errors import ExportError
 
-    if not isinstance(expr, sp.Basic):
-        raise ExportError(f"expr must be a sympy expression; got {type(expr).__name__}")
-    missing = sorted(s.name for s in expr.free_symbols if s.name not in variables)
-    if missing:
-        raise ExportError(f"{term or expr} uses {missing}, which variables does not give "
-                          f"(it gives {sorted(variables)})")
+    _check_expression(expr, list(variables), term or "expr", ExportError, ExportError)
 
     def build(e):
         if e.is_Symbol:

@@ -38,7 +38,6 @@ import copy
 
 import numpy as np
 
-from ..constraints import Integral, Interval, validate_params
 from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import symbol
 from .one_step import OneStepFit
@@ -80,11 +79,6 @@ class SmoothedLogUpdater:
     def __init__(self, model, *, outputs, measurement_noise, kinematics=None,
                  process_noise="auto", start=None, optimizer=None, substeps: int = 4,
                  max_sweeps: int = 20, passes: int = 4):
-        validate_params("SmoothedLogUpdater",
-                        {"substeps": substeps, "max_sweeps": max_sweeps, "passes": passes},
-                        {"substeps": [Interval(Integral, 1, 1000)],
-                         "max_sweeps": [Interval(Integral, 1, 10_000)],
-                         "passes": [Interval(Integral, 1, 1000)]})
         self.model, self.outputs, self.optimizer = model, outputs, optimizer
         self.measurement_noise, self.kinematics = measurement_noise, kinematics
         self.process_noise, self.start = process_noise, start
