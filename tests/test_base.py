@@ -111,3 +111,20 @@ def test_fitted_models_through_a_process_pool():
         predictions = pool.map(_predict, [MODELS[n] for n in names])
     for name, prediction in zip(names, predictions, strict=True):
         np.testing.assert_array_equal(prediction, _predict(MODELS[name]))
+
+
+def test_clone_is_an_unfitted_copy_with_the_constructor_arguments_as_sklearn_clone_gives():
+    import sklearn.base
+
+    import discrepancy as dc
+    from discrepancy.base import clone
+    from discrepancy.errors import NotFittedError
+
+    theta = np.random.default_rng(0).normal(size=(50, 3))
+    fitted = dc.STLSQ(threshold=0.2, alpha=1e-3).fit(theta, theta @ [1.0, 0.0, -2.0])
+    copy = clone(fitted)
+    assert type(copy) is dc.STLSQ and copy is not fitted
+    assert copy.get_params() == sklearn.base.clone(fitted).get_params()
+    with pytest.raises(NotFittedError):
+        copy.check_is_fitted()
+    fitted.check_is_fitted()     # the source keeps its fit

@@ -246,3 +246,21 @@ def test_gram_shape_errors():
         stats.add(np.zeros((4, 3)), np.zeros((5, 2)))
     with pytest.raises(ShapeError):
         stats.merge(dc.GramStatistics(3, 1))
+
+
+def test_refit_on_support_is_least_squares_of_each_target_on_its_own_terms():
+    from discrepancy.optimizers.base import refit_on_support
+
+    rng = np.random.default_rng(3)
+    theta, y = rng.normal(size=(200, 5)), rng.normal(size=(200, 2))
+    support = np.array([[True, False, True, True, False], [False, False, False, False, False]])
+    coef = refit_on_support(theta.T @ theta, theta.T @ y, support)
+    expected = np.linalg.lstsq(theta[:, support[0]], y[:, 0], rcond=None)[0]
+    np.testing.assert_allclose(coef[0, support[0]], expected, rtol=1e-12)
+    assert not coef[0, ~support[0]].any() and not coef[1].any()
+    one = refit_on_support(theta.T @ theta, (theta.T @ y)[:, 0], support[0])
+    np.testing.assert_array_equal(one, coef[0])
+    ridge = refit_on_support(theta.T @ theta, theta.T @ y, support, alpha=10.0)[0, support[0]]
+    a = theta[:, support[0]]
+    np.testing.assert_allclose(ridge, np.linalg.solve(a.T @ a + 10.0 * np.eye(3), a.T @ y[:, 0]),
+                               rtol=1e-12)

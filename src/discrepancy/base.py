@@ -19,7 +19,7 @@ import numpy as np
 from .constraints import validate_params
 from .errors import NotFittedError, ParameterError
 
-__all__ = ["Estimator"]
+__all__ = ["Estimator", "clone"]
 
 _NO_DEFAULT = inspect.Parameter.empty
 
@@ -127,6 +127,13 @@ class Estimator:
             if default is _NO_DEFAULT or not _same(value, default):
                 shown.append(f"{name}={_short_repr(value)}")
         return f"{type(self).__name__}({', '.join(shown)})"
+
+
+def clone(estimator: Estimator) -> Estimator:
+    """An unfitted copy of ``estimator`` with the same constructor arguments (the values
+    themselves shared, not copied: nested estimators are not fitted in place by their
+    owners). The library's one clone, for candidates fitted side by side from a template."""
+    return type(estimator)(**estimator.get_params(deep=False))
 
 
 def _same(value, default) -> bool:

@@ -24,7 +24,7 @@ import numpy as np
 from .errors import ParameterError, describe
 
 __all__ = ["Constraint", "InstanceOf", "Integral", "Interval", "Options", "Predicate", "Real",
-           "is_callable", "make_constraint", "validate_params"]
+           "check_argument", "is_callable", "make_constraint", "validate_params"]
 
 
 class Constraint(ABC):
@@ -160,13 +160,18 @@ def make_constraint(spec) -> Constraint:
 def validate_params(owner: str, params: Mapping, constraints: Mapping) -> None:
     """Raise ParameterError for the first parameter that meets none of its constraints."""
     for name, allowed in constraints.items():
-        if name not in params:
-            continue
-        value = params[name]
-        rules = [make_constraint(c) for c in allowed]
-        if not any(c.is_satisfied_by(value) for c in rules):
-            expected = " or ".join(str(c) for c in rules)
-            raise ParameterError(f"{owner}: {name} must be {expected}; got {_shown(value)}")
+        if name in params:
+            check_argument(f"{owner}: {name}", params[name], *allowed)
+
+
+def check_argument(name: str, value, *allowed) -> None:
+    """Raise :class:`~discrepancy.errors.ParameterError` ("``name`` must be ...; got ...")
+    unless ``value`` meets one of the constraints ``allowed`` (or their shorthands, see
+    :func:`make_constraint`): the declared constraints of a function's own arguments."""
+    rules = [make_constraint(c) for c in allowed]
+    if not any(c.is_satisfied_by(value) for c in rules):
+        expected = " or ".join(str(c) for c in rules)
+        raise ParameterError(f"{name} must be {expected}; got {_shown(value)}")
 
 
 def _shown(value) -> str:

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..constraints import Integral, Interval, check_argument
 from ..errors import ParameterError, ShapeError
 from .limits import Limits
 from .replay import Run, replay
@@ -94,10 +95,8 @@ def closed_loop(plant, law, x0, *, dt: float, steps: int, limits: Limits | None 
     x0 = np.asarray(x0, dtype=float).ravel()
     n = len(x0)
     measured = _measured(outputs, n)
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
-        raise ParameterError(f"steps must be a positive integer; got {steps!r}")
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
-        raise ParameterError(f"samples must be a positive integer; got {samples!r}")
+    check_argument("steps", steps, Interval(Integral, 1))
+    check_argument("samples", samples, Interval(Integral, 1))
     steps, samples = int(steps), int(samples)
     from ..resources import check_memory, n_bytes
     check_memory(f"the log of {steps} steps x {samples} samples of {n} states",

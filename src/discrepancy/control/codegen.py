@@ -21,7 +21,8 @@ import warnings
 from pathlib import Path
 
 from .._optional import require
-from ..errors import CompilationWarning, ParameterError
+from ..constraints import check_argument
+from ..errors import CompilationWarning
 
 ca = require("casadi", purpose="discrepancy.control")
 
@@ -56,8 +57,7 @@ def compiled(function, *, enabled=True):
             graphs of them; not every plugin does).
         enabled: False to skip compiling (returns ``function``).
     """
-    if not isinstance(enabled, bool):
-        raise ParameterError(f"compile must be True or False; got {enabled!r}")
+    check_argument("compile", enabled, bool)
     if not enabled:
         return function
     name = function.name()

@@ -3,11 +3,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import numpy as np
 import sympy as sp
 
 from .._optional import require
+from ..constraints import Integral, Interval, Real, check_argument
 from ..errors import ParameterError, ShapeError, describe
+from ..runge_kutta import runge_kutta_step
 from ..symbolic import to_casadi
 
 ca = require("casadi", purpose="discrepancy.control")
@@ -62,13 +63,9 @@ def as_casadi(model) -> ca.Function:
 
 def rk4_step(f: ca.Function, dt: float, substeps: int) -> ca.Function:
     """``F(x, u) -> x(t + dt)``: ``substeps`` classical Runge–Kutta steps with ``u`` held."""
-    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or \
-            not 1 <= substeps <= 1000:
-        raise ParameterError(f"substeps must be an integer in [1, 1000]; got {substeps!r}")
+    check_argument("substeps", substeps, Interval(Integral, 1, 1000))
     substeps = int(substeps)
-    if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, (int, float, np.number)) \
-            or not 0 < dt < np.inf:
-        raise ParameterError(f"dt must be a finite step > 0 (s); got {dt!r}")
+    check_argument("dt", dt, Interval(Real, 0, None, closed="neither"))
     if not isinstance(f, ca.Function):
         raise ParameterError(f"f must be a casadi.Function f(x, u) -> xdot (see as_casadi); "
                              f"got {describe(f)}")
@@ -78,9 +75,5 @@ def rk4_step(f: ca.Function, dt: float, substeps: int) -> ca.Function:
     h = dt / substeps
     x = x0
     for _ in range(substeps):
-        k1 = f(x, u)
-        k2 = f(x + h / 2 * k1, u)
-        k3 = f(x + h / 2 * k2, u)
-        k4 = f(x + h * k3, u)
-        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        x = runge_kutta_step(f, x, h, u, u, u)
     return ca.Function("F", [x0, u], [x], ["x", "u"], ["x_next"])

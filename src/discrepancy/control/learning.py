@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..constraints import Integral, Interval, check_argument
 from ..errors import ParameterError, describe
 
 
@@ -109,9 +110,7 @@ def learn_by_attempts(attempt: Callable, updater: DiscrepancyUpdater, *, first,
     Returns:
         the attempts in order; the last succeeded unless ``max_attempts`` ran out.
     """
-    if isinstance(max_attempts, bool) or not isinstance(max_attempts, (int, np.integer)) or \
-            max_attempts < 1:
-        raise ParameterError(f"max_attempts must be a positive integer; got {max_attempts!r}")
+    check_argument("max_attempts", max_attempts, Interval(Integral, 1))
     max_attempts = int(max_attempts)
     if not callable(attempt):
         raise ParameterError(f"attempt must be a callable attempt(model) -> (success, "

@@ -16,6 +16,7 @@ import warnings
 import numpy as np
 
 from ..errors import ConvergenceWarning
+from ..runge_kutta import runge_kutta_step
 from .codegen import ca
 
 FOLDS = 5
@@ -102,9 +103,5 @@ def _flow_functions(setup, substeps: int):
     f = ca.Function("f", [x, u, xi], [rhs])
     h, z = dt / substeps, x
     for _ in range(substeps):
-        k1 = f(z, u, xi)
-        k2 = f(z + h / 2 * k1, u, xi)
-        k3 = f(z + h / 2 * k2, u, xi)
-        k4 = f(z + h * k3, u, xi)
-        z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        z = runge_kutta_step(lambda state, held: f(state, held, xi), z, h, u, u, u)
     return ca.Function("flow", [x, u, xi, dt], [z]), ca.Function("theta", [x, u], [theta])

@@ -38,6 +38,7 @@ import copy
 
 import numpy as np
 
+from ..constraints import Integral, Interval, check_argument
 from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import symbol
 from .one_step import OneStepFit
@@ -226,9 +227,7 @@ def _check_settings(updater) -> None:
         raise ParameterError(f"kinematics must be a dict {{state: rate state}} of names; got "
                              f"{kin!r}")
     for name in ("substeps", "max_sweeps", "passes"):
-        value = getattr(updater, name)
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ParameterError(f"{name} must be a positive integer; got {value!r}")
+        check_argument(name, getattr(updater, name), Interval(Integral, 1))
     updater.outputs, updater._kinematics = list(outputs), dict(kin or {})
 
 

@@ -21,7 +21,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..constraints import Interval, Real, validate_params
+from ..base import clone
+from ..constraints import Integral, Interval, Real, check_argument
 from ..data.trajectory import as_2d, as_times
 from ..data.validation import check_array
 from ..differentiation import SavitzkyGolay
@@ -31,12 +32,6 @@ from .dissipation_model import DissipationDiscrepancy
 from .metrics import error_summary
 from .record import PreparedRecording
 from .smoothing import smoothing_scores
-
-
-def clone(model: DissipationDiscrepancy) -> DissipationDiscrepancy:
-    """An unfitted copy with the same parameters."""
-    return type(model)(**model.get_params(deep=False))
-
 
 #: fewest training seconds a forecast origin leaves for the fit, as a share of training
 MIN_FIT_SHARE = 0.3
@@ -127,8 +122,7 @@ def default_procedures(model: DissipationDiscrepancy, training_seconds: float,
     the most recent half or 30 %: the regime a forecast continues) x cumulative or
     per-block energy loss (blocks of 1/32 of the training part) x terms chosen by the elbow
     of the training error or by forecasting its last 20 %."""
-    validate_params("default_procedures", {"training_seconds": training_seconds},
-                    {"training_seconds": [Interval(Real, 0, None, closed="neither")]})
+    check_argument("training_seconds", training_seconds, Interval(Real, 0, None, closed="neither"))
     if libraries is None:
         terms = model._terms(n_positions)
         libraries = {"full library": terms, "no Stribeck": without_stribeck(terms)}
@@ -222,8 +216,7 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
     """
     q = as_2d("q", q, allow_1d=True)
     t = as_times("t", t, len(q))
-    if not isinstance(split, (int, np.integer)) or not 10 <= split < len(q):
-        raise ParameterError(f"split must be a sample index in [10, {len(q)}); got {split!r}")
+    check_argument("split", split, Interval(Integral, 10, len(q), closed="left"))
     if isinstance(n_origins, bool) or not isinstance(n_origins, (int, np.integer)) or \
             not 2 <= n_origins <= min(MAX_ORIGINS, split // 2):
         raise ParameterError(f"n_origins must be an integer in [2, "
@@ -247,9 +240,8 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
     training = float(t[-1] - t[0])
     if horizon is None:
         horizon = min(validation, training / 3)
-    elif not isinstance(horizon, (int, float)) or not 0 < horizon < training:
-        raise ParameterError(f"horizon must be a length in (0, {training:.4g}) s; got "
-                             f"{horizon!r}")
+    else:
+        check_argument("horizon (s)", horizon, Interval(Real, 0, training, closed="neither"))
     for candidate in candidates.values():
         candidate._validate_params()
     starts = _origins(t, len(t) - 1, float(horizon), n_origins)

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import nnls
 
+from ..optimizers.gram import residual_sum
+
 #: ridge (relative to the equilibrated Gram's unit diagonal) when Cholesky fails
 RIDGE = 1e-12
 
@@ -105,7 +107,7 @@ class Statistics:
         """Coefficients ``(k,)`` of the terms ``subset`` and the loss."""
         s = list(subset)
         xi = solve_constrained(self.gram[np.ix_(s, s)], self.rhs[s], rows, bounds)
-        loss = self.yy - 2 * xi @ self.rhs[s] + xi @ self.gram[np.ix_(s, s)] @ xi
+        loss = residual_sum(self.gram[np.ix_(s, s)], self.rhs[s], self.yy, xi)
         return xi, float(loss)
 
     def offset(self, subset, xi) -> float:

@@ -19,6 +19,7 @@ from math import comb
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
+from ..constraints import Integral, Interval, check_argument
 from ..data.validation import check_array
 from ..errors import ParameterError
 from .regression import statistics
@@ -83,8 +84,7 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     features = check_array("features", features, allow_1d=True)
     delta_h = check_array("delta_h", delta_h, ndim=1, n_rows=features.shape[0])
     m, p = features.shape
-    if not isinstance(max_terms, (int, np.integer)) or max_terms < 1:
-        raise ParameterError(f"max_terms must be an integer >= 1; got {max_terms!r}")
+    check_argument("max_terms", max_terms, Interval(Integral, 1))
     max_terms = min(int(max_terms), p)
     if not 0 <= holdout < 0.9:
         raise ParameterError(f"holdout must be a fraction in [0, 0.9); got {holdout}")

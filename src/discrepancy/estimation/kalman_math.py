@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..runge_kutta import runge_kutta_step
+
 LOG_2PI = float(np.log(2 * np.pi))
 
 
@@ -25,20 +27,30 @@ def rk4(ops, rates, z, stages, h, substeps: int):
     """``substeps`` RK4 steps of ``z' = rates(z, u)`` (``z`` a tuple) over ``h``, the input
     at the stage times (rows ``2s``, ``2s + 1``, ``2s + 2`` of ``stages`` for substep
     ``s``)."""
-    dt = h / substeps
+    dt, z = h / substeps, _Parts(z)
 
-    def move(base, slope, factor):
-        return tuple(b + factor * k for b, k in zip(base, slope, strict=True))
+    def parts_rates(parts, u):
+        return _Parts(rates(parts, u))
 
     for s in range(substeps):
         u0, um, u1 = (ops.stage(stages, 2 * s + j) for j in range(3))
-        k1 = rates(z, u0)
-        k2 = rates(move(z, k1, dt / 2), um)
-        k3 = rates(move(z, k2, dt / 2), um)
-        k4 = rates(move(z, k3, dt), u1)
-        z = tuple(zi + dt / 6 * (a + 2 * b + 2 * c + d)
-                  for zi, a, b, c, d in zip(z, k1, k2, k3, k4, strict=True))
-    return z
+        z = runge_kutta_step(parts_rates, z, dt, u0, um, u1)
+    return tuple(z)
+
+
+class _Parts(tuple):
+    """Arrays moved together by one RK4 step (a state, its Jacobian, its noise): added
+    part by part and scaled by a step length, numpy arrays and CasADi symbols alike."""
+
+    __array_ufunc__ = None    # ``numpy scalar * parts`` scales the parts (``__rmul__``)
+
+    def __add__(self, other):
+        return _Parts(a + b for a, b in zip(self, other, strict=True))
+
+    def __mul__(self, factor):
+        return _Parts(factor * a for a in self)
+
+    __rmul__ = __mul__
 
 
 def propagate(ops, x, stages, h, Q, substeps: int, discrete: bool):

@@ -15,6 +15,7 @@ import numpy as np
 
 from .._optional import require
 from ..errors import ExportError
+from ..runge_kutta import runge_kutta_step
 from ..symbolic import feature_name, to_casadi
 
 #: relative agreement required between a traced prior and the callable it came from
@@ -128,11 +129,7 @@ def rk4_step(f, n_states: int, n_inputs: int, substeps: int, *, n_parameters: in
 
     z, dt = x, h / substeps
     for s in range(substeps):
-        k1 = rhs(z, 2 * s)
-        k2 = rhs(z + dt / 2 * k1, 2 * s + 1)
-        k3 = rhs(z + dt / 2 * k2, 2 * s + 1)
-        k4 = rhs(z + dt * k3, 2 * s + 2)
-        z = z + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        z = runge_kutta_step(rhs, z, dt, 2 * s, 2 * s + 1, 2 * s + 2)
     return ca.Function("step", [x, stages, h, *extra], [z])
 
 
@@ -148,11 +145,7 @@ def rk4_substep(f, n_states: int, n_inputs: int, n_parameters: int):
     def rhs(z, j):
         return f(z, ca.vertcat(*[stages[3 * i + j] for i in range(n_inputs)]), p)
 
-    k1 = rhs(x, 0)
-    k2 = rhs(x + dt / 2 * k1, 1)
-    k3 = rhs(x + dt / 2 * k2, 1)
-    k4 = rhs(x + dt * k3, 2)
-    return ca.Function("substep", [x, stages, dt, p], [x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+    return ca.Function("substep", [x, stages, dt, p], [runge_kutta_step(rhs, x, dt, 0, 1, 2)])
 
 
 def chained_step(substep, n_inputs: int, substeps: int):

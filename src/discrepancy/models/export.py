@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from ..errors import ExportError, ParameterError
+from ..constraints import Options, check_argument
+from ..errors import ExportError
 from ..symbolic import feature_name, symbol
 from ..symbolic import to_casadi as expression_to_casadi
 
@@ -15,8 +16,7 @@ def _part(model, part, *, default_hybrid: bool = False):
     if part is None:
         symbolic = model.prior_.is_symbolic or model.prior is None
         part = "hybrid" if symbolic or default_hybrid else "discrepancy"
-    if not isinstance(part, str) or part not in ("hybrid", "discrepancy"):
-        raise ParameterError(f"part must be 'hybrid' or 'discrepancy'; got {part!r}")
+    check_argument("part", part, Options(("hybrid", "discrepancy")))
     if part == "hybrid" and model.prior is not None and not model.prior_.is_symbolic:
         raise ExportError("the prior is a Python callable, so the hybrid model has no exact "
                           "symbolic form; pass the prior as sympy expressions, or ask for "

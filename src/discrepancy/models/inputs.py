@@ -20,6 +20,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..constraints import Options, check_argument
 from ..data.trajectory import as_2d
 from ..data.validation import as_float_array
 from ..errors import DataError, ParameterError, ShapeError
@@ -33,9 +34,7 @@ BANDLIMITED_OVERSAMPLING = 16
 def check_hold(hold) -> str:
     """``hold`` if it is one of :data:`HOLDS`, else a :class:`~discrepancy.errors.ParameterError`.
     """
-    if not isinstance(hold, str) or hold not in HOLDS:
-        raise ParameterError(f"u_hold must be one of {', '.join(map(repr, HOLDS))}; got "
-                             f"{hold!r}")
+    check_argument("u_hold", hold, Options(HOLDS))
     return hold
 
 

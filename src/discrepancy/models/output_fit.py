@@ -6,7 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..constraints import Integral, Interval, Real, check_argument
 from ..errors import ParameterError, ShapeError
+from ..optimizers.selection import one_standard_error
 from .output_error import (
     NEGLIGIBLE,
     RIDGE,
@@ -113,16 +115,9 @@ def _prior_start(fit, x0s, rows, *, guessed: bool):
 
 
 def _check_options(max_terms, holdout, tolerance):
-    if max_terms is not None and (not isinstance(max_terms, (int, np.integer))
-                                  or isinstance(max_terms, bool) or max_terms < 1):
-        raise ParameterError(f"max_terms must be a positive integer or None; got {max_terms!r}")
-    if not isinstance(holdout, (int, float)) or isinstance(holdout, bool) or \
-            not 0.05 <= holdout <= 0.5:
-        raise ParameterError(f"holdout must be a fraction in [0.05, 0.5]; got {holdout!r}")
-    if tolerance is not None and (not isinstance(tolerance, (int, float))
-                                  or isinstance(tolerance, bool) or not 0 <= tolerance <= 1):
-        raise ParameterError(f"tolerance must be None (one standard error) or a number in "
-                             f"[0, 1]; got {tolerance!r}")
+    check_argument("max_terms", max_terms, None, Interval(Integral, 1))
+    check_argument("holdout", holdout, Interval(Real, 0.05, 0.5))
+    check_argument("tolerance", tolerance, None, Interval(Real, 0, 1))
 
 
 def _allowed(setup) -> np.ndarray:
@@ -192,10 +187,11 @@ def _path(fit, x0s, max_terms, holdout, tolerance, progress):
 def choose(path, tolerance):
     """The sparsest support whose held-out error is within one standard error of the best
     (``tolerance=None``), or within ``tolerance`` (relative, of the RMS) of it."""
-    best = min(path, key=lambda s: s.heldout_mse)
     if tolerance is None:
-        bar = best.heldout_mse + best.heldout_se
-        return min((s for s in path if s.heldout_mse <= bar), key=lambda s: s.n_terms)
+        return path[one_standard_error([s.heldout_mse for s in path],
+                                       [s.heldout_se for s in path],
+                                       [s.n_terms for s in path])]
+    best = min(path, key=lambda s: s.heldout_mse)
     bar = (1 + tolerance) * best.heldout_error
     return min((s for s in path if s.heldout_error <= bar), key=lambda s: s.n_terms)
 

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..constraints import Integral, Interval, check_argument
 from ..data.trajectory import as_2d, as_times
-from ..errors import ParameterError, ShapeError
+from ..errors import ShapeError
+from ..runge_kutta import runge_kutta_step
 from .inputs import stage_inputs
 
 
@@ -19,9 +21,7 @@ def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,
                   substeps: int) -> np.ndarray:
     """States ``(m - steps, n)``: row ``i`` predicts ``x[i + steps]`` from ``x[i]``."""
     _check_steps(steps)
-    if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or \
-            not 1 <= substeps <= 1000:
-        raise ParameterError(f"substeps must be an integer in [1, 1000]; got {substeps!r}")
+    check_argument("substeps", substeps, Interval(Integral, 1, 1000))
     m = x.shape[0]
     if m <= steps:
         raise ShapeError(f"x has {m} samples; predicting {steps} steps ahead needs more")
@@ -36,7 +36,7 @@ def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,
             for s in range(substeps):
                 u0, um, u1 = (None, None, None) if stages is None else \
                     (stages[j:j + starts, 2 * s + i] for i in range(3))
-                state = rk4_step(rhs, state, dt, u0, um, u1)
+                state = runge_kutta_step(rhs, state, dt, u0, um, u1)
     return state
 
 
@@ -60,19 +60,7 @@ def iterate_ahead(step, x, u, *, n_inputs: int, steps: int) -> np.ndarray:
 
 
 def _check_steps(steps) -> None:
-    if not isinstance(steps, (int, np.integer)) or isinstance(steps, bool) or steps < 1:
-        raise ParameterError(f"steps must be a positive integer; got {steps!r}")
-
-
-def rk4_step(rhs, x: np.ndarray, dt, u0=None, um=None, u1=None) -> np.ndarray:
-    """One classical Runge-Kutta step of a batch of states ``x`` ``(B, n)`` of length ``dt``
-    (a number or ``(B, 1)``), the input ``u0``, ``um``, ``u1`` ``(B, r)`` (or None) at the
-    step's start, middle and end: the step every batched forecast here takes."""
-    k1 = rhs(x, u0)
-    k2 = rhs(x + dt / 2 * k1, um)
-    k3 = rhs(x + dt / 2 * k2, um)
-    k4 = rhs(x + dt * k3, u1)
-    return x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    check_argument("steps", steps, Interval(Integral, 1))
 
 
 def checked_states(model, x, u):

@@ -16,8 +16,10 @@ from collections.abc import Callable
 import numpy as np
 import scipy.integrate
 
+from ..constraints import Integral, Interval, Options, Real, check_argument
 from ..data.trajectory import as_times
 from ..errors import ParameterError, ShapeError, SimulationError, describe
+from ..runge_kutta import runge_kutta_step
 from .inputs import input_law, stage_inputs
 
 ADAPTIVE = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
@@ -48,20 +50,11 @@ def _check_options(method, rtol, atol, substeps, max_evaluations, solver_kws):
                              f"max_evaluations, compiled, integrator, integrator_kws, "
                              f"interpolator, interpolator_kws, {', '.join(SOLVER_OPTIONS)} (for "
                              f"adaptive methods), {', '.join(ODEINT_OPTIONS)} (for odeint)")
-    if not isinstance(method, str) or method not in METHODS:
-        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+    check_argument("method", method, Options(METHODS))
     for name, value in (("rtol", rtol), ("atol", atol)):
-        if not isinstance(value, (int, float)) or isinstance(value, bool) or \
-                not 0 < value < np.inf:
-            raise ParameterError(f"{name} must be a positive number; got {value!r}")
-    if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or \
-            not 1 <= substeps <= 10_000:
-        raise ParameterError(f"substeps must be an integer in [1, 10000]; got {substeps!r}")
-    if max_evaluations is not None and (not isinstance(max_evaluations, (int, np.integer))
-                                        or isinstance(max_evaluations, bool)
-                                        or max_evaluations < 1):
-        raise ParameterError(f"max_evaluations must be a positive integer or None; got "
-                             f"{max_evaluations!r}")
+        check_argument(name, value, Interval(Real, 0, closed="neither"))
+    check_argument("substeps", substeps, Interval(Integral, 1, 10_000))
+    check_argument("max_evaluations", max_evaluations, None, Interval(Integral, 1))
 
 
 def check_options(options: dict) -> None:
@@ -203,6 +196,11 @@ def _odeint(f, law, times, out, rtol, atol, options):
     return states
 
 
+def _timed(f):
+    """``f(t, x, u)`` as the ``rates(x, (t, u))`` of :func:`runge_kutta_step`."""
+    return lambda x, stage: f(stage[0], x, stage[1])
+
+
 def _fixed_step(f, times, out, substeps, stages):
     x = out[0].copy()
     for i in range(1, len(times)):
@@ -211,10 +209,6 @@ def _fixed_step(f, times, out, substeps, stages):
         s = None if stages is None else stages[i - 1]
         for j in range(substeps):
             u0, um, u1 = (None, None, None) if s is None else s[2 * j:2 * j + 3]
-            k1 = f(tau, x, u0)
-            k2 = f(tau + h / 2, x + h / 2 * k1, um)
-            k3 = f(tau + h / 2, x + h / 2 * k2, um)
-            k4 = f(tau + h, x + h * k3, u1)
-            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            x = runge_kutta_step(_timed(f), x, h, (tau, u0), (tau + h / 2, um), (tau + h, u1))
             tau += h
         out[i] = x

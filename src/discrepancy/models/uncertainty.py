@@ -26,7 +26,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..constraints import InstanceOf, Integral, Interval, Options, Real, validate_params
+from ..constraints import (
+    InstanceOf,
+    Integral,
+    Interval,
+    Options,
+    Real,
+    check_argument,
+    validate_params,
+)
 from ..errors import ParameterError
 from ..optimizers import GramStatistics
 from ..optimizers.resampling import from_blocks
@@ -235,8 +243,7 @@ def _check_uncertainty(model, uncertainty) -> None:
 def quantiles(curves: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
     """Pointwise ``level`` band ``(low, high)`` of resampled curves ``(R, ...)``, ignoring
     resamples that are NaN (diverged)."""
-    if not isinstance(level, (float, int)) or not 0 < level < 1:
-        raise ParameterError(f"level must be a number in (0, 1); got {level!r}")
+    check_argument("level", level, Interval(Real, 0, 1, closed="neither"))
     tail = (1 - level) / 2
     low, high = np.nanquantile(curves, [tail, 1 - tail], axis=0)
     return low, high
@@ -268,8 +275,7 @@ def simulate_interval(model, x0, t, u, uncertainty, level, n_draws, seed, **inte
     validate_params("simulate_interval", {"seed": seed}, {"seed": BOOTSTRAP_CONSTRAINTS["seed"]})
     samples = uncertainty.samples
     if n_draws is not None:
-        if not isinstance(n_draws, (int, np.integer)) or n_draws < 2:
-            raise ParameterError(f"n_draws must be an integer >= 2 or None; got {n_draws!r}")
+        check_argument("n_draws", n_draws, None, Interval(Integral, 2))
         pick = np.random.default_rng(seed).choice(len(samples), min(n_draws, len(samples)),
                                                   replace=False)
         samples = samples[pick]

@@ -47,6 +47,23 @@ def solve_normal(gram: np.ndarray, rhs: np.ndarray, alpha: float = 0.0) -> np.nd
     return z / (d[:, None] if rhs.ndim == 2 else d)
 
 
+def refit_on_support(gram: np.ndarray, rhs: np.ndarray, support: np.ndarray,
+                     alpha: float = 0.0) -> np.ndarray:
+    """Least squares (ridge ``alpha``) of each target on its own terms, from the sums alone.
+
+    ``gram`` ``(p, p)``, ``rhs`` ``(p, n)`` and ``support`` ``(n, p)`` bool give coefficients
+    ``(n, p)`` (zero off the support); one target's ``rhs`` ``(p,)`` and ``support`` ``(p,)``
+    give ``(p,)``. The unbiased refit of every solver and the refits of model selection.
+    """
+    if rhs.ndim == 1:
+        return refit_on_support(gram, rhs[:, None], support[None, :], alpha)[0]
+    coef = np.zeros(support.shape)
+    for i, s in enumerate(support):
+        if s.any():
+            coef[i, s] = solve_normal(gram[np.ix_(s, s)], rhs[s, i], alpha)
+    return coef
+
+
 #: folds of a standalone ``fit(theta, y)`` (each made of two contiguous runs of rows)
 FIT_FOLDS = 5
 

@@ -21,6 +21,13 @@ from ..resources import ALWAYS_ALLOWED, check_memory
 SIZE = Interval(Integral, 0)
 
 
+def residual_sum(gram: np.ndarray, rhs: np.ndarray, yy, coef: np.ndarray):
+    """``Σ (y - Θ ξ)²`` of one target from its sums: ``yy - 2 ξᵀ Θᵀy + ξᵀ ΘᵀΘ ξ``, with
+    ``gram`` ``(p, p)``, ``rhs`` ``(p,)``, ``yy`` a number and ``coef`` ``(p,)`` on the same
+    terms. Not clipped at 0: rounding can leave a perfect fit slightly negative."""
+    return yy - 2 * coef @ rhs + coef @ gram @ coef
+
+
 @dataclass
 class GramStatistics:
     """Running sums for ``p`` features and ``n`` targets.
@@ -172,9 +179,8 @@ class GramStatistics:
 
     def residual_sum_of_squares(self, coef: np.ndarray) -> np.ndarray:
         """``Σ (y - Θ ξ)²`` per target for ``coef`` ``(n, p)``, from the sums alone."""
-        cross = np.einsum("pn,np->n", self.rhs, coef)
-        quad = np.einsum("np,pq,nq->n", coef, self.gram, coef)
-        return np.maximum(self.yy - 2 * cross + quad, 0.0)
+        return np.maximum([residual_sum(self.gram, self.rhs[:, i], self.yy[i], c)
+                           for i, c in enumerate(coef)], 0.0)
 
     def to_vector(self) -> np.ndarray:
         """All sums in one flat array (folds included), for shipping between processes."""

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..constraints import Integral, Interval, Real
 from ..errors import ConvergenceWarning
-from .base import Optimizer, register
+from .base import Optimizer, refit_on_support, register
 
 
 @register("lasso")
@@ -51,8 +51,7 @@ class Lasso(Optimizer):
                           stacklevel=4)
         coef = np.array([c for c, _ in results])
         if self.unbias:
-            from .stlsq import STLSQ
-            coef = STLSQ._refit(gram, rhs, coef != 0)
+            coef = refit_on_support(gram, rhs, coef != 0)
         return coef
 
     def _descend(self, gram, rhs, penalty) -> tuple[np.ndarray, bool]:

@@ -28,7 +28,8 @@ from copy import copy
 
 import numpy as np
 
-from .base import solve_normal
+from .base import refit_on_support, solve_normal
+from .gram import residual_sum
 from .linear_constraints import LinearConstraints
 
 #: fold errors below FLOOR * mean(x_dot^2) are numerical (a relative RMS error of 1e-6)
@@ -70,21 +71,15 @@ def threshold_path(stlsq, gram, rhs_column, mask=None) -> list[tuple[float, np.n
     return path
 
 
-def _refit(gram, rhs, support, alpha):
-    coef = np.zeros(len(rhs))
-    if support.any():
-        coef[support] = solve_normal(gram[np.ix_(support, support)], rhs[support], alpha)
-    return coef
-
-
 def cross_validated_errors(stats, i: int, support: np.ndarray, alpha: float) -> np.ndarray:
     """Mean squared error on each usable fold of target ``i``, the support fitted on the
     other folds, ``(K,)``."""
     folds = stats.usable_folds()
     errors = np.empty(len(folds))
     for k, fold in enumerate(folds):
-        coef = _refit(stats.gram - fold.gram, stats.rhs[:, i] - fold.rhs[:, i], support, alpha)
-        sq = fold.yy[i] - 2 * coef @ fold.rhs[:, i] + coef @ fold.gram @ coef
+        coef = refit_on_support(stats.gram - fold.gram, stats.rhs[:, i] - fold.rhs[:, i],
+                                support, alpha)
+        sq = residual_sum(fold.gram, fold.rhs[:, i], fold.yy[i], coef)
         errors[k] = max(sq, 0.0) / fold.count
     return errors
 
@@ -107,7 +102,8 @@ def one_standard_error(error, se, sizes) -> int:
     """The one-standard-error rule: the index of the smallest model (``sizes``, ties broken
     by the lower error) whose mean ``error`` is within one standard error ``se`` of the
     best's. The one implementation of the rule (the threshold path here, forecast scores in
-    :mod:`discrepancy.selection`)."""
+    :mod:`discrepancy.selection`, output-error supports in
+    :mod:`discrepancy.models.output_fit`)."""
     error = np.asarray(error, dtype=float)
     best = int(np.argmin(error))
     ok = [j for j in range(len(error)) if error[j] <= error[best] + se[best]]
@@ -141,9 +137,9 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
             pick = one_standard_error(error, se, [int(s.sum()) for _, s in path])
         else:  # residuals below FLOOR of the signal are numerical, as in the folds
             floor = FLOOR * max(stats.signal[i], stats.yy[i])
-            error = np.array([bic(max(_rss(stats, i, _refit(stats.gram, stats.rhs[:, i], s,
-                                                             alpha)), floor),
-                                  int(s.sum()), stats.count) for _, s in path])
+            error = np.array([bic(max(_rss(stats, i, refit_on_support(
+                stats.gram, stats.rhs[:, i], s, alpha)), floor), int(s.sum()), stats.count)
+                for _, s in path])
             se = np.zeros_like(error)
             pick = int(np.argmin(error))
         threshold, support = path[pick]
@@ -162,4 +158,4 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
 
 
 def _rss(stats, i, coef) -> float:
-    return float(stats.yy[i] - 2 * coef @ stats.rhs[:, i] + coef @ stats.gram @ coef)
+    return float(residual_sum(stats.gram, stats.rhs[:, i], stats.yy[i], coef))

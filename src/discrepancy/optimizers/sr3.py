@@ -22,7 +22,7 @@ from scipy.optimize import brentq
 
 from ..constraints import Integral, Interval, Options, Predicate, Real
 from ..errors import ConvergenceWarning, ParameterError, ShapeError
-from .base import Optimizer, register, solve_normal
+from .base import Optimizer, refit_on_support, register, solve_normal
 
 PROX = {
     "l0": lambda w, lam: w * (np.abs(w) > np.sqrt(2 * lam)),
@@ -154,8 +154,7 @@ class SR3(Optimizer):
         self.coef_full_ = full.T * scale[None, :]
         coef = sparse.T
         if self.unbias:
-            from .stlsq import STLSQ
-            coef = STLSQ._refit(stats.gram, stats.rhs, coef != 0)
+            coef = refit_on_support(stats.gram, stats.rhs, coef != 0)
         return coef
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..constraints import InstanceOf, Integral, Interval, Options, Real
 from ..errors import ConvergenceWarning, ParameterError, ShapeError
-from .base import Optimizer, register, solve_normal
+from .base import Optimizer, refit_on_support, register
 from .linear_constraints import LinearConstraints, constrained_solve
 
 NON_NEGATIVE = Interval(Real, 0, None)
@@ -93,7 +93,7 @@ class STLSQ(Optimizer):
             if constraints.has_linear:
                 coef = constrained_solve(gram, rhs, ind, constraints, self.alpha)
             else:
-                coef = self._refit(gram, rhs, ind, self.alpha)
+                coef = refit_on_support(gram, rhs, ind, self.alpha)
             ind = ((np.abs(coef) >= self.threshold) | keep) & constraints.allowed
             coef[~ind] = 0.0
             if np.array_equal(ind, previous):
@@ -104,14 +104,5 @@ class STLSQ(Optimizer):
         if self.unbias:
             support = ind | keep   # the thresholded support (no absolute cut-off: units vary)
             coef = constrained_solve(gram, rhs, support, constraints) if constraints.has_linear \
-                else self._refit(gram, rhs, support)
-        return coef
-
-    @staticmethod
-    def _refit(gram, rhs, support, alpha: float = 0.0):
-        """Least squares (ridge ``alpha``) of each target on its own support ``(n, p)``."""
-        coef = np.zeros(support.shape)
-        for i, s in enumerate(support):
-            if s.any():
-                coef[i, s] = solve_normal(gram[np.ix_(s, s)], rhs[s, i], alpha)
+                else refit_on_support(gram, rhs, support)
         return coef

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..constraints import Predicate
 from ..errors import ParameterError
-from .base import Optimizer, is_regressor, register
+from .base import Optimizer, is_regressor, refit_on_support, register
 
 #: coefficients below this are taken as zero (the terms a regressor dropped)
 ZERO = 1e-14
@@ -65,6 +65,5 @@ class WrappedOptimizer(Optimizer):
                                      "that part)")
         coef[np.abs(coef) <= ZERO] = 0.0
         if self.unbias:
-            from .stlsq import STLSQ
-            coef = STLSQ._refit(stats.gram, stats.rhs, coef != 0)
+            coef = refit_on_support(stats.gram, stats.rhs, coef != 0)
         return coef

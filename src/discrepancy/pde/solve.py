@@ -25,9 +25,11 @@ import warnings
 import numpy as np
 
 from ..errors import DataError
-from ..optimizers import STLSQ, GramStatistics, solve_normal
+from ..optimizers import STLSQ, GramStatistics
 from ..optimizers.backward import backward_path
-from ..optimizers.selection import threshold_path
+from ..optimizers.base import refit_on_support
+from ..optimizers.gram import residual_sum
+from ..optimizers.selection import one_standard_error, threshold_path
 
 N_FOLDS = 5
 #: fold errors below FLOOR times the mean square ``u_t`` count as numerical
@@ -58,10 +60,8 @@ def solve(optimizer, stats: GramStatistics):
         floor = FLOOR * max(stats.signal[i], stats.yy[i]) / stats.count
         errors = np.maximum(errors, floor)
         mean, se = errors.mean(axis=1), errors.std(axis=1, ddof=1) / np.sqrt(errors.shape[1])
-        best = int(np.argmin(mean))
-        ok = [j for j in range(len(candidates)) if mean[j] <= mean[best] + se[best]]
-        pick = min(ok, key=lambda j: (candidates[j].sum(), mean[j]))
-        coef[i] = _refit(stats.gram, stats.rhs[:, i], candidates[pick])
+        pick = one_standard_error(mean, se, [int(s.sum()) for s in candidates])
+        coef[i] = refit_on_support(stats.gram, stats.rhs[:, i], candidates[pick])
         selection.append({"n_terms": [int(s.sum()) for s in candidates],
                           "error": mean.tolist(), "error_se": se.tolist(),
                           "criterion": "purged blocked cross-validation", "chosen": pick})
@@ -91,13 +91,6 @@ def _candidates(optimizer, stats, i) -> list[np.ndarray]:
     return found
 
 
-def _refit(gram, rhs, support) -> np.ndarray:
-    coef = np.zeros(len(rhs))
-    if support.any():
-        coef[support] = solve_normal(gram[np.ix_(support, support)], rhs[support])
-    return coef
-
-
 def _fold_errors(stats, segments, i, support) -> np.ndarray:
     """Mean squared error of target ``i`` on each fold, the support fitted on the segments
     neither in the fold nor next to it."""
@@ -110,8 +103,8 @@ def _fold_errors(stats, segments, i, support) -> np.ndarray:
         drop = [segments[j] for j in sorted(set(test) | purge) if 0 <= j < k]
         gram = stats.gram - sum(s.gram for s in drop)
         rhs = stats.rhs[:, i] - sum(s.rhs[:, i] for s in drop)
-        c = _refit(gram, rhs, support)
-        sq = sum(segments[j].yy[i] - 2 * c @ segments[j].rhs[:, i] + c @ segments[j].gram @ c
+        c = refit_on_support(gram, rhs, support)
+        sq = sum(residual_sum(segments[j].gram, segments[j].rhs[:, i], segments[j].yy[i], c)
                  for j in test)
         count = sum(segments[j].count for j in test)
         out[f] = max(sq, 0.0) / max(count, 1)

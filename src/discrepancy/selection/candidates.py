@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optimizers.base import solve_normal
+from ..optimizers.base import refit_on_support
 from ..optimizers.linear_constraints import constrained_solve
 
 #: supports per equation offered to forecasts at most (the empty one included)
@@ -104,7 +104,7 @@ class FoldFits:
             if s.any():
                 key = (i, s.tobytes(), fold)
                 if key not in self._cache:
-                    self._cache[key] = solve_normal(gram[np.ix_(s, s)], rhs[s, i], self.alpha)
+                    self._cache[key] = refit_on_support(gram, rhs[:, i], s, self.alpha)[s]
                 coef[i, s] = self._cache[key]
         return coef
 

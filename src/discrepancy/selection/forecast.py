@@ -1,7 +1,7 @@
 """Batched forecasts: many coefficient sets from many origins, integrated at once.
 
 Every (candidate, window) pair is one row of a batch of states; each row carries its own
-coefficients, so one RK4 step of the batch (:func:`discrepancy.models.prediction.rk4_step`,
+coefficients, so one RK4 step of the batch (:func:`discrepancy.runge_kutta.runge_kutta_step`,
 the input linear between samples) advances every candidate's forecast from every origin:
 the cost is ``steps`` evaluations of the prior and of the union of the candidates' active
 terms on ``candidates x windows x (n + 1)`` rows, whatever the record's length. A step
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..models.prediction import rk4_step
+from ..runge_kutta import runge_kutta_step
 from ..symbolic import compile_numpy
 
 #: scaled squared error given to a lead once a forecast has diverged (10 standard deviations)
@@ -290,4 +290,4 @@ def _step(model, x, origins, window, k, discrete):
     h = origins.h[window, k][:, None]
     u0, um, u1 = (None, None, None) if stages is None else \
         (stages[:, 0], stages[:, 1], stages[:, 2])
-    return rk4_step(model, x, h, u0, um, u1)
+    return runge_kutta_step(model, x, h, u0, um, u1)

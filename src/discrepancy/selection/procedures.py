@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..base import clone
+from ..constraints import Integral, Interval, check_argument
 from ..data.trajectory import as_trajectories
 from ..errors import ConvergenceError, DataError, ParameterError, describe
 from ..libraries import FeatureLibrary
@@ -88,9 +90,7 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     from tqdm.auto import tqdm
 
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
-    if not isinstance(n_origins, (int, np.integer)) or isinstance(n_origins, bool) or \
-            n_origins < 2:
-        raise ParameterError(f"n_origins must be an integer >= 2; got {n_origins!r}")
+    check_argument("n_origins", n_origins, Interval(Integral, 2))
     templates = _templates(model, candidates, records, outputs)
     fit_kws = dict(fit_kws or {})
     shortest = min(r.n_samples for r in records)
@@ -148,20 +148,16 @@ def _templates(model, candidates, records, outputs) -> dict:
     if not isinstance(candidates, Mapping) or not candidates:
         raise ParameterError(f"candidates must be a non-empty mapping of names to libraries "
                              f"or unfitted DiscrepancyModels; got {describe(candidates)}")
-    out = {"prior alone": _clone(model).set_params(optimizer="prior_only", selection="auto")}
+    out = {"prior alone": clone(model).set_params(optimizer="prior_only", selection="auto")}
     for name, c in candidates.items():
         if isinstance(c, (FeatureLibrary, str)):
-            out[str(name)] = _clone(model).set_params(feature_library=c)
+            out[str(name)] = clone(model).set_params(feature_library=c)
         elif isinstance(c, DiscrepancyModel) and not hasattr(c, "coef_"):
-            out[str(name)] = _clone(c)
+            out[str(name)] = clone(c)
         else:
             raise ParameterError(f"candidates[{name!r}] must be a FeatureLibrary, a library "
                                  f"spec or an unfitted DiscrepancyModel; got {describe(c)}")
     return out
-
-
-def _clone(model):
-    return type(model)(**model.get_params(deep=False))
 
 
 def _variables_with_data(records, states, outputs):
@@ -195,7 +191,7 @@ class _Judge:
     def fit(self, template, fraction):
         parts = [_head(r, fraction) for r in self.records]
         u = None if parts[0].u is None else [p.u for p in parts]
-        return self._fit(_clone(template), [p.x for p in parts], [p.t for p in parts], u)
+        return self._fit(clone(template), [p.x for p in parts], [p.t for p in parts], u)
 
 
 class _StateForecasts(_Judge):

@@ -149,26 +149,8 @@ class DoublePendulum(System):
             raise ParameterError(f"params must be DoublePendulumParameters; got {type(p).__name__}")
         return p
 
-    def _numbers(self, *, friction: bool = True) -> dict:
-        values = self.parameters.as_dict()
-        if not friction:
-            values.update(k1=0.0, k2=0.0)
-        return {symbol(k): v for k, v in values.items()}
-
-    def sympy_energy(self, *, symbolic_parameters: bool = False) -> tuple[sp.Expr, sp.Expr]:
-        """``(T, V)`` as sympy expressions of the state symbols (J)."""
-        kinetic, potential, *_ = _symbolic_model()
-        if symbolic_parameters:
-            return kinetic, potential
-        subs = self._numbers()
-        return kinetic.subs(subs), potential.subs(subs)
-
-    def sympy_rhs(self, *, friction: bool = True) -> list[sp.Expr]:
-        """``[dphi1, dphi2, ddphi1, ddphi2]`` as explicit sympy expressions (for export)."""
-        *_, mass, rest = _symbolic_model()
-        subs = self._numbers(friction=friction)
-        acc = mass.subs(subs).LUsolve(rest.subs(subs))
-        return [symbol("dphi1"), symbol("dphi2"), *[sp.simplify(a) for a in acc]]
+    def _numbers(self) -> dict:
+        return {symbol(k): v for k, v in self.parameters.as_dict().items()}
 
     def _compiled(self):
         key = tuple(self._numbers().values())
@@ -192,10 +174,6 @@ class DoublePendulum(System):
     def kinetic_energy(self, x) -> np.ndarray:
         """``T`` (J), shape ``(m,)``."""
         return self._compiled()[0](self._state(x))
-
-    def potential_energy(self, x) -> np.ndarray:
-        """``V`` (J), shape ``(m,)``; zero at the pivot height, negative hanging down."""
-        return self._compiled()[1](self._state(x))
 
     def energy(self, x) -> np.ndarray:
         """Conservative model energy ``H_m = T + V`` (J), shape ``(m,)``."""

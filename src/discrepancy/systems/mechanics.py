@@ -48,9 +48,3 @@ def lagrange_equations(kinetic: sp.Expr, potential: sp.Expr, q: Sequence[sp.Symb
 def time_derivative(expr: sp.Expr, q: Sequence[sp.Symbol], dq: Sequence[sp.Symbol]) -> sp.Expr:
     """``d expr / dt`` for an expression of the coordinates ``q`` with rates ``dq``."""
     return sum(sp.diff(expr, qi) * dqi for qi, dqi in zip(q, dq, strict=True))
-
-
-def solve_accelerations(mass: sp.Matrix, rhs: sp.Matrix) -> list[sp.Expr]:
-    """Explicit ``q̈ = M⁻¹ b`` (for export to sympy/CasADi); fine for 2-3 coordinates."""
-    solution = mass.LUsolve(rhs)
-    return [sp.simplify(e) for e in solution]

@@ -18,7 +18,8 @@ from discrepancy.control import DiscrepancyUpdater, as_casadi, learn_by_attempts
 from discrepancy.systems.double_pendulum_on_cart import CartPendulumParameters, DoublePendulumOnCart
 
 from .campaign import CONTROLLERS
-from .cart_mpc import MAX_ATTEMPTS, X_HANG, cart_task
+from .cart_mpc import cart_task
+from .cart_mpc_settings import MAX_ATTEMPTS, X_HANG
 
 NAME = "cart-leaderboard"
 GROUPS = {"masses": ("m1", "m2"), "lengths": ("a1", "a2", "l1", "l2"),

@@ -15,21 +15,22 @@ from discrepancy.control import PAPER_Q, PAPER_R, Limits
 from discrepancy.systems.double_pendulum_on_cart import STATE_NAMES, DoublePendulumOnCart
 
 from .campaign import learning_from_flawed, nominal, perturbed_study
+from .cart_mpc_settings import (
+    DU_MAX,
+    INITIAL_STD,
+    KINEMATICS,
+    MAX_ATTEMPTS,
+    MEASURED,
+    NOISE,
+    RAIL,
+    U_MAX,
+    X_HANG,
+)
 from .cart_robustness import PerturbedPlants, perturbed_cases
 from .cart_swingup import library
 from .swingup_task import SwingUpTask
 
 NAME = "cart-mpc"
-RAIL, U_MAX, DU_MAX = 0.5, 20.0, 500.0   # m, m/s², m/s³
-#: measurement noise std: angles (rad), cart (m), angle rates (rad/s), cart speed (m/s)
-NOISE = (1e-3, 1e-3, 5e-4, 2e-2, 2e-2, 5e-3)
-X_HANG = np.array([np.pi, np.pi, 0.0, 0.0, 0.0, 0.0])
-#: output feedback: the encoders measure the angles and the cart, not the rates
-MEASURED = ("phi1", "phi2", "s")
-KINEMATICS = {"phi1": "dphi1", "phi2": "dphi2", "s": "ds"}
-#: belief about the start (the perturbed cases start within 0.02 rad of hanging, at rest)
-INITIAL_STD = (0.02, 0.02, 1e-3, 0.01, 0.01, 0.01)
-MAX_ATTEMPTS = 4                          # MPC attempts on a perturbed system, re-id between
 
 
 def cart_task() -> SwingUpTask:
@@ -45,26 +46,6 @@ def cart_task() -> SwingUpTask:
                        noise_std=np.array(NOISE), log_samples=40, smoothing=2,
                        library=library, measured=MEASURED, kinematics=KINEMATICS,
                        initial_std=np.array(INITIAL_STD))
-
-
-#: the exact discrepancy of the paper's flawed model: [-sin(phi1), 0, 0, 0, 0, 0.05 u]
-EXACT_TERMS = {"phi1": {"sin(phi1)": -1.0}, "ds": {"u": 0.05}}
-
-
-def identification(model, exact=None) -> dict:
-    """The learned terms against the exact discrepancy: every term, how many are spurious
-    (not in the exact discrepancy) or missing, and the exact terms' learned coefficients."""
-    exact = EXACT_TERMS if exact is None else exact
-    names = model.get_feature_names()
-    terms = {s: {n: float(c) for n, c in zip(names, row, strict=True) if c != 0}
-             for s, row in zip(model.state_names_, model.coefficients(), strict=True)}
-    wanted = {(s, t) for s, ts in exact.items() for t in ts}
-    found = {(s, t) for s, ts in terms.items() for t in ts}
-    return {"identified_terms": terms, "active_terms": model.complexity,
-            "spurious_terms": len(found - wanted), "missing_terms": len(wanted - found),
-            "exact_terms_learned": {f"{t} in ({s})'": terms.get(s, {}).get(t, 0.0)
-                                    for s, t in sorted(wanted)},
-            "exact_terms": exact}
 
 
 def run(out_dir, *, quick: bool = False, verbose=None):

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .campaign import CONTROLLERS, OUTPUT_FEEDBACK, REFERENCE, ROUTES
-from .cart_mpc import DU_MAX, EXACT_TERMS, MAX_ATTEMPTS, NOISE, RAIL, U_MAX, identification
+from .cart_mpc_settings import DU_MAX, EXACT_TERMS, MAX_ATTEMPTS, NOISE, RAIL, U_MAX, identification
 from .report import machine
 
 #: what each controller's CPU time per sample measures, by the study's controller name

@@ -9,7 +9,7 @@ from discrepancy.energy.dissipation import integrated_powers
 from discrepancy.symbolic import compile_numpy
 from discrepancy.systems.double_pendulum import DoublePendulum
 
-from .pendulum_energy import dissipation_model
+from .pendulum_forms import dissipation_model
 
 
 def library_blind(pend: DoublePendulum, rec, n_origins: int) -> BlindFit:

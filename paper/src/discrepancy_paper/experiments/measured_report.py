@@ -6,7 +6,7 @@ import numpy as np
 
 from discrepancy.energy import percent_error
 
-from .pendulum_energy import _file_law, _state_form_text
+from .pendulum_forms import file_law, state_form_text
 
 VALIDATION_BAR = 8.0    # % of the validation window's dH range (the target set for this data)
 
@@ -36,7 +36,7 @@ def experiment_report(rep, blind, default, pend, x, t, split, fitted, file_pred,
     _blind_section(rep)
     _model_section(rep, model, pend, x, t, split, fitted, file_pred)
     _rates_section(rep, blind, default, x, t, split)
-    _state_form_text(rep, rep.results["state_form"])
+    state_form_text(rep, rep.results["state_form"])
 
 
 def _library_section(rep, curves):
@@ -241,7 +241,7 @@ def _model_section(rep, model, pend, x, t, split, fitted, file_pred):
     rep.figure(fit_figure(panels, title=model.equation()), "fit.png",
                "dH and the dissipation model (cf. paper Figs. 4b,c and 5)")
     laws = {"learned": list(zip(model.terms_, model.coef_, strict=True)),
-            "rig file (viscous)": _file_law(pend.parameters)}
+            "rig file (viscous)": file_law(pend.parameters)}
     rep.figure(friction_law_figure(laws, speed_max=10.0, title="Joint friction laws"),
                "friction_law.png", "Learned joint friction torques (a mount loss, if chosen, "
                "is not a joint torque and is not drawn) and the rig file's viscous law")

@@ -7,25 +7,16 @@ that spans ``H_m`` and one that does not) and write figures, ``report.md``, ``re
 """
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import numpy as np
-import sympy as sp
 from tqdm import tqdm
 
 from discrepancy.differentiation import Dequantised, SavitzkyGolay
-from discrepancy.energy import (
-    DissipationDiscrepancy,
-    EnergyDiscrepancy,
-    EnergyTautologyWarning,
-    error_summary,
-    percent_error,
-)
-from discrepancy.energy.dissipation import default_friction_library
-from discrepancy.symbolic import symbol
+from discrepancy.energy import error_summary, percent_error
 from discrepancy.systems.double_pendulum import DoublePendulum, DoublePendulumParameters
 
+from .pendulum_forms import dissipation_model, file_law, state_form, state_form_text
 from .report import Report
 
 RATE = 1000.0            # Hz
@@ -59,43 +50,6 @@ def encoder_angles(x: np.ndarray) -> np.ndarray:
     """Measured ``[phi1, phi2]``: encoders read ``phi1`` and the relative angle ``phi2 - phi1``."""
     phi1 = quantise(x[:, 0])
     return np.column_stack([phi1, phi1 + quantise(x[:, 1] - x[:, 0])])
-
-
-def state_libraries():
-    """The paper's library (cubic polynomials + Fourier up to 3 in all four states, which
-    lacks H_m's coupling term) and the same plus ``cos(phi1 - phi2) dphi1 dphi2`` (spans H_m)."""
-    import discrepancy as dc
-
-    def paper():
-        return dc.PolynomialLibrary(degree=3) + dc.FourierLibrary(n_frequencies=3)
-
-    phi1, phi2, d1, d2 = (symbol(n) for n in ("phi1", "phi2", "dphi1", "dphi2"))
-    coupling = dc.CustomLibrary(expressions=[sp.cos(phi1 - phi2) * d1 * d2])
-    return {"paper library (does not span H_m)": paper(),
-            "paper library + cos(phi1-phi2) dphi1 dphi2 (spans H_m)": paper() + coupling}
-
-
-def _state_form(energy, q_train, t_train, validations, smoothing=None):
-    """Fit the paper's form with both libraries; errors on training and each validation."""
-    import discrepancy as dc
-
-    out = {}
-    for name, library in state_libraries().items():
-        model = EnergyDiscrepancy(energy, feature_library=library, position_names=PHI,
-                                  optimizer=dc.STLSQ(threshold=1e-4, alpha=1e-8),
-                                  differentiation_method=SavitzkyGolay(**(smoothing or SMOOTHING)))
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", EnergyTautologyWarning)
-            model.fit(q_train, t_train)
-        row = {"span_residual_of_H_m": model.span_residual_,
-               "tautology_warning": any(issubclass(w.category, EnergyTautologyWarning)
-                                        for w in caught),
-               "n_terms": int(np.count_nonzero(model.coef_)),
-               "training": model.score(q_train, t_train)}
-        for label, (q, t) in validations.items():
-            row[label] = model.score(q, t)
-        out[name] = row
-    return out
 
 
 def _viscous(model) -> tuple[float, float]:
@@ -167,7 +121,8 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
                  "validation_true_loss_inside_95_percent_band_fraction":
                      _band_coverage(model, uncertainty, xv, tv, x_val, t)}
         if seed == seeds[0] or not quick:
-            entry["state_form"] = _state_form(pend.energy, q, t, {"validation": (q_val, t)})
+            entry["state_form"] = state_form(pend.energy, q, t, {"validation": (q_val, t)},
+                                             SMOOTHING)
         per_seed.append(entry)
         rows.append([seed, k1, k2, entry["k1_relative_error_percent"],
                      entry["k2_relative_error_percent"],
@@ -221,10 +176,10 @@ def run_synthetic(out_dir, *, quick: bool = False) -> Path:
     model, q, q_val = first
     _synthetic_figures(rep, pend, model, q, q_val, t, energy_figure, fit_figure)
     rep.figure(friction_law_figure({f"learned (seed {seeds[0]})": list(zip(
-        model.terms_, model.coef_, strict=True)), "true": _file_law(params)},
+        model.terms_, model.coef_, strict=True)), "true": file_law(params)},
         title="Friction law"), "friction_law.png", "Learned and true friction torque")
     rep.figure(seeds_figure(seeds, k1e, k2e, vale), "seeds.png", "Per-seed errors")
-    _state_form_text(rep, per_seed[0]["state_form"])
+    state_form_text(rep, per_seed[0]["state_form"])
     rep.results["state_form_median_over_seeds"] = {
         name: {f"{part}_max_abs_percent_of_max": float(np.median(
             [e["state_form"][name][part]["max_abs_percent_of_max"]
@@ -264,26 +219,6 @@ def _quantisation_control(rep, pend, params, per_seed, t):
              "difference of their time courses separates k1 from k2.")
 
 
-def _file_law(params):
-    terms = friction_library(DoublePendulum())
-    return [(terms[0], params.k1), (terms[1], params.k2)]
-
-
-#: the double pendulum's coordinates (absolute angles, the elbow turns at dphi1 - dphi2)
-PHI = DoublePendulum().position_names
-
-
-def friction_library(pend: DoublePendulum, **kwargs):
-    """The default friction laws for the pendulum's joints (``joints()`` of the system)."""
-    return default_friction_library([f"d{n}" for n in pend.position_names],
-                                    joints=pend.joints(), **kwargs)
-
-
-def dissipation_model(pend: DoublePendulum, **kwargs) -> DissipationDiscrepancy:
-    """A dissipation-form model of ``pend`` with its names and friction laws (unless given)."""
-    return DissipationDiscrepancy.from_system(pend, **kwargs)
-
-
 def _synthetic_figures(rep, pend, model, q, q_val, t, energy_figure, fit_figure):
     x, tt = model.states(q, t)
     h = pend.energy(x)
@@ -298,23 +233,6 @@ def _synthetic_figures(rep, pend, model, q, q_val, t, energy_figure, fit_figure)
                        "error": percent_error(dh, pred), "error_label": "error (% of max|dH|)"})
     rep.figure(fit_figure(panels, title=model.equation()), "fit.png",
                "dH and the dissipation model; error in % of max|dH| (cf. paper Figs. 4b,c, 5)")
-
-
-def _state_form_text(rep, results):
-    rep.text("## Paper's form: dH = E0 - H_m regressed on state functions\n"
-             "dH is a path integral of the dissipated power, not a function of the state. "
-             "A library that spans H_m fits it as E0 - H_m (training error near 0, no friction "
-             "learned) and is wrong on a swing with another initial energy; a library that "
-             "does not span H_m cannot represent dH.")
-    rows = []
-    for name, r in results.items():
-        row = [name, r["span_residual_of_H_m"], r["tautology_warning"], r["n_terms"],
-               r["training"]["max_abs_percent_of_max"]]
-        row += [r[k]["max_abs_percent_of_max"] for k in r if k.startswith("validation")]
-        rows.append(row)
-    rep.text("Seed 0 (synthetic) or the recording (measured):")
-    rep.table(["library", "span residual", "warned", "terms", "train %max", "val %max"], rows)
-    rep.results["state_form"] = results
 
 
 def run_experiment(out_dir, *, quick: bool = False) -> Path:

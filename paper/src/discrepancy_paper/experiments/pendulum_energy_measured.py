@@ -29,11 +29,7 @@ from .measured_laws import (
     term_magnitudes,
 )
 from .measured_report import experiment_report
-from .pendulum_energy import (
-    _state_form,
-    dissipation_model,
-    friction_library,
-)
+from .pendulum_forms import dissipation_model, friction_library, state_form
 from .report import Report
 
 RECORDING = "DoublePendulumDataForParameterEstimation.mat"
@@ -169,7 +165,7 @@ def run_experiment(out_dir, *, quick: bool = False) -> Path:
         "chosen_procedure_with_other_smoothing": [
             _sensitivity_row(REAL_SMOOTHING, model, errors),
             *_smoothing_sensitivity(pend, model, rec)]})
-    rep.results["state_form"] = _state_form(
+    rep.results["state_form"] = state_form(
         pend.energy, rec.angles[:rec.split_index], rec.t[:rec.split_index],
         {"validation (continued recording, same E0)": (rec.angles, rec.t)}, REAL_SMOOTHING)
     experiment_report(rep, blind, default, pend, x, t, split, (dh, pred, band), file_pred,

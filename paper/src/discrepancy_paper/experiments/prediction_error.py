@@ -20,6 +20,7 @@ import time
 import numpy as np
 
 import discrepancy as dc
+from discrepancy.runge_kutta import runge_kutta_step
 
 from .prediction_error_settings import (  # noqa: F401 (the settings, read here by tests)
     DT,
@@ -55,14 +56,15 @@ def record(seed: int, duration: float, *, push_std=PUSH_STD, process_noise=PROCE
     levels[0] = 0.0
     push = levels[(t // PUSH_EVERY).astype(int)]
     x, h, states = np.zeros((1, 2)), DT / fine, np.empty((m, 2))
+
+    def held(z, args):
+        return true_rhs(z, *args)
+
     for k in range(m):
         states[k] = x[0]
         args = (u[k:k + 1], push[k:k + 1])
         for _ in range(fine):
-            k1 = true_rhs(x, *args)
-            k2 = true_rhs(x + h / 2 * k1, *args)
-            k3 = true_rhs(x + h / 2 * k2, *args)
-            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + true_rhs(x + h * k3, *args))
+            x = runge_kutta_step(held, x, h, args, args, args)
             x[0, 1] += process_noise * np.sqrt(h) * rng.standard_normal()
     y = states[:, :1] + SENSOR_NOISE * rng.standard_normal((m, 1))
     return t, u[:, None], y, states, push
