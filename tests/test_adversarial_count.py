@@ -1,4 +1,4 @@
-"""The adversarial suite tries 1086 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 1116 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -7,7 +7,7 @@
 | optimizer | 84 |
 | differentiation | 44 |
 | energy | 123 |
-| control | 93 |
+| control | 114 |
 | estimation | 57 |
 | model file | 54 |
 | io.load | 40 |
@@ -15,7 +15,7 @@
 | dask | 11 |
 | fit | 79 |
 | prior | 21 |
-| model | 69 |
+| model | 78 |
 | isolated | 51 |
 | predict | 17 |
 | score | 21 |
@@ -29,10 +29,10 @@
 | systems | 8 |
 | pde | 33 |
 | plots | 10 |
-| total | 1086 |
+| total | 1116 |
 
-874 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 212 must give the right answer, checked against an
+895 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 221 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 51 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
