@@ -49,5 +49,8 @@ def test_every_public_callable_has_adversarial_rows(tmp_path, monkeypatch):
     for entry, n in sorted(others.items()):
         print(f"| {'(' + entry + ', no Python callable)':{width}} | {n:4d} |")
     print(f"| {'total':{width}} | {len(reached):4d} |")
+    untraced = [case_id for case_id, name in reached.items()
+                if name is None and not case_id.startswith("cli: ")]
+    print("rows whose calls reach no public Python callable (besides the CLI's):", untraced)
     without = sorted(set(catalogue()) - set(counts))
     assert not without, f"{len(without)} public callables have no adversarial rows: {without}"
