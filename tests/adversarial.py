@@ -24,7 +24,12 @@ from typing import Any
 import numpy as np
 import pytest
 
+from adversarial_reach import CHILD_HOOK, target, watch
 from discrepancy.errors import DiscrepancyError
+
+#: case id -> the public callable the row exercised (``adversarial_reach.target``), filled
+#: as rows run; ``test_adversarial_reach.py`` checks that every public callable has rows
+REACHED: dict[str, str | None] = {}
 
 
 def circle(m: int):
@@ -85,14 +90,19 @@ def params(cases: list[Case]):
 
 
 def check(case: Case) -> None:
-    """Run an in-process row and assert its expectation."""
-    if case.expect.error is None:
-        value = case.call()
-        assert case.expect.check(value), f"{case.id}: wrong answer {value!r:.300}"
-        return
-    with pytest.raises(Exception) as info:  # noqa: B017  (any exception, inspected below)
-        case.call()
-    assert_error(case, type(info.value), str(info.value))
+    """Run an in-process row and assert its expectation; record the callable it exercised."""
+    calls: list = []
+    try:
+        if case.expect.error is None:
+            with watch(calls):
+                value = case.call()
+            assert case.expect.check(value), f"{case.id}: wrong answer {value!r:.300}"
+            return
+        with pytest.raises(Exception) as info, watch(calls):  # noqa: B017  (inspected below)
+            case.call()
+        assert_error(case, type(info.value), str(info.value))
+    finally:
+        REACHED[case.id] = target(calls)
 
 
 def assert_error(case: Case, kind: type | str, message: str) -> None:
@@ -113,13 +123,19 @@ class _Late(BaseException):
 def _alarm(*_):
     raise _Late()
 signal.signal(signal.SIGALRM, _alarm)
+{hook}
 {prelude}
 _rows = json.loads(sys.stdin.read())
 for _i, _code in enumerate(_rows):
     _start = time.perf_counter()
+    _calls.clear()
     signal.alarm({seconds})
     try:
-        _value = eval(compile(_code, f"row {{_i}}", "eval"))
+        sys.setprofile(_hook)
+        try:
+            _value = eval(compile(_code, f"row {{_i}}", "eval"))
+        finally:
+            sys.setprofile(None)
         _out = {{"kind": None, "value": repr(_value)[:300]}}
     except _Late:
         _out = {{"kind": "Timeout", "message": "no answer in {seconds} s"}}
@@ -129,6 +145,7 @@ for _i, _code in enumerate(_rows):
     finally:
         signal.alarm(0)
     _out["seconds"] = time.perf_counter() - _start
+    _out["calls"] = _calls
     print(json.dumps(_out), flush=True)
 '''
 
@@ -139,7 +156,7 @@ def run_isolated(prelude: str, cases: list[Case], *, cwd) -> dict[str, dict]:
     A row's result is ``{"kind": "Class,Base,...", "message"}`` for an exception,
     ``{"kind": None, "value"}`` for a value, or ``{"kind": "Timeout"}``; rows the child
     never reached (it died) are missing."""
-    script = _CHILD.format(cap=MEMORY_CAP, seconds=ROW_SECONDS,
+    script = _CHILD.format(cap=MEMORY_CAP, seconds=ROW_SECONDS, hook=CHILD_HOOK,
                            prelude=textwrap.dedent(prelude))
     proc = subprocess.run([sys.executable, "-c", script], input=json.dumps(
         [c.call for c in cases]), capture_output=True, text=True, cwd=cwd,
@@ -154,6 +171,7 @@ def run_isolated(prelude: str, cases: list[Case], *, cwd) -> dict[str, dict]:
 def check_isolated(case: Case, results: dict) -> None:
     """Assert an isolated row's result (from :func:`run_isolated`)."""
     result = results.get(case.id)
+    REACHED[case.id] = target((result or {}).get("calls", []))
     assert result is not None, f"{case.id}: the child process died: {results.get('__died__')}"
     assert result["kind"] != "Timeout", f"{case.id}: hangs ({result['message']})"
     if case.expect.error is None:

@@ -1,35 +1,43 @@
-"""The adversarial suite tries 874 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 1116 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
 | cli | 46 |
-| library | 54 |
-| optimizer | 77 |
-| differentiation | 43 |
-| energy | 49 |
-| control | 71 |
-| estimation | 51 |
+| library | 58 |
+| optimizer | 84 |
+| differentiation | 44 |
+| energy | 123 |
+| control | 114 |
+| estimation | 57 |
 | model file | 54 |
 | io.load | 40 |
-| stream | 37 |
+| stream | 40 |
 | dask | 11 |
 | fit | 79 |
 | prior | 21 |
-| model | 56 |
+| model | 78 |
 | isolated | 51 |
 | predict | 17 |
 | score | 21 |
 | export | 21 |
 | simulate | 54 |
 | bootstrap | 21 |
-| total | 874 |
+| metrics | 6 |
+| symbolic | 15 |
+| data | 5 |
+| selection | 5 |
+| systems | 8 |
+| pde | 33 |
+| plots | 10 |
+| total | 1116 |
 
-722 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
-matches a pattern naming the argument; 152 must give the right answer, checked against an
+895 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+matches a pattern naming the argument; 221 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 51 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a
 3 GiB address-space cap and 20 s per row. This file checks that the tables hold exactly
-these numbers of distinct rows, so the figures cannot drift from the suite.
+these numbers of distinct rows, so the figures cannot drift from the suite; which public
+callable each row exercises, and that every one has rows, is ``test_adversarial_reach.py``'s.
 """
 from __future__ import annotations
 
@@ -46,10 +54,12 @@ import test_adversarial_fit
 import test_adversarial_isolated
 import test_adversarial_models
 import test_adversarial_options
+import test_adversarial_public
 
 TABLES = [test_adversarial_fit, test_adversarial_components, test_adversarial_models,
           test_adversarial_files, test_adversarial_cli, test_adversarial_energy_control,
-          test_adversarial_isolated, test_adversarial_estimation, test_adversarial_options]
+          test_adversarial_isolated, test_adversarial_estimation, test_adversarial_options,
+          test_adversarial_public]
 
 
 def test_the_docstring_gives_the_number_of_distinct_rows_per_entry_point():

@@ -40,7 +40,21 @@ NARY_FUNCTIONS: dict[str, tuple[Callable, Callable, str]] = {
 
 def symbol(name: str) -> sp.Symbol:
     """The real symbol used for a variable name everywhere in the package."""
+    if not isinstance(name, str) or not name:
+        from .errors import ParameterError
+        raise ParameterError(f"a variable name must be a non-empty string; got {name!r:.80}")
     return sp.Symbol(name, real=True)
+
+
+def _check_expression(expr, names, label: str, type_error: type, name_error: type) -> None:
+    """``type_error`` unless ``expr`` is a sympy expression, ``name_error`` if it uses a
+    symbol that is not one of ``names``; ``label`` names the argument."""
+    if not isinstance(expr, sp.Basic):
+        raise type_error(f"{label} must be a sympy expression; got {type(expr).__name__}")
+    unknown = sorted(s.name for s in expr.free_symbols if s.name not in names)
+    if unknown:
+        raise name_error(f"{label} = {expr} uses {unknown}, which are not among the "
+                         f"variables {list(names)}")
 
 
 def adopt(expr, names: Sequence[str], *, label: str) -> sp.Expr:
@@ -53,12 +67,7 @@ def adopt(expr, names: Sequence[str], *, label: str) -> sp.Expr:
 
     if isinstance(expr, (int, float)) and not isinstance(expr, bool):
         expr = sp.Float(expr) if isinstance(expr, float) else sp.Integer(expr)
-    if not isinstance(expr, sp.Basic):
-        raise ParameterError(f"{label} must be a sympy expression; got {type(expr).__name__}")
-    unknown = sorted(s.name for s in expr.free_symbols if s.name not in names)
-    if unknown:
-        raise UnknownNameError(f"{label} = {expr} uses {unknown}, which are not among the "
-                               f"variables {list(names)}")
+    _check_expression(expr, names, label, ParameterError, UnknownNameError)
     return expr.xreplace({s: symbol(s.name) for s in expr.free_symbols})
 
 
@@ -164,6 +173,9 @@ def to_data(expr: sp.Expr):
     Nodes: ``["sym", name]``, ``["num", p, q]``, ``["float", value]``, ``["add", ...]``,
     ``["mul", ...]``, ``["pow", base, exponent]``, ``["fn", name, ...]``.
     """
+    if not isinstance(expr, sp.Basic):
+        from .errors import ExportError
+        raise ExportError(f"expr must be a sympy expression; got {type(expr).__name__}")
     if expr.is_Symbol:
         return ["sym", expr.name]
     if expr in CONSTANTS.values():
@@ -312,6 +324,10 @@ def to_casadi(expr: sp.Expr, variables: Mapping[str, object], *, term: str | Non
     from ._optional import require
 
     ca = require("casadi", purpose="exporting to CasADi")
+
+    from .errors import ExportError
+
+    _check_expression(expr, list(variables), term or "expr", ExportError, ExportError)
 
     def build(e):
         if e.is_Symbol:

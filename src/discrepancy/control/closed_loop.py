@@ -50,6 +50,9 @@ class ClosedLoopRun(Run):
         jumps (a derivative never straddles a jump), ready for ``DiscrepancyModel.fit`` or
         :meth:`~.learning.DiscrepancyUpdater.update`. ``until``: keep only the intervals
         that end by this time (s), e.g. when a rig's safety stop ended the log."""
+        if until is not None and (isinstance(until, bool) or not isinstance(
+                until, (int, float, np.number)) or np.isnan(until)):
+            raise ParameterError(f"until must be a time (s) or None; got {until!r}")
         k = len(self.u) if until is None else int(np.sum(self.t_dense[:, -1] <= until + 1e-12))
         us = [np.full((len(x), len(uk)), uk) for x, uk in
               zip(self.x_measured_dense[:k], self.u[:k], strict=True)]
@@ -57,6 +60,8 @@ class ClosedLoopRun(Run):
 
     def first_exit(self, limits: Limits, *, state_tol: float = 1e-3) -> float | None:
         """The first output time (s) at which a true state left its bounds (None if never)."""
+        if not isinstance(limits, Limits):
+            raise ParameterError(f"limits must be a Limits; got {type(limits).__name__}")
         n = self.x.shape[1]
         xl, xu, *_ = limits.sized(n, self.u.shape[1])
         out = np.any((self.x_dense > xu + state_tol) | (self.x_dense < xl - state_tol), axis=2)

@@ -3,8 +3,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import sympy as sp
+
 from .._optional import require
-from ..constraints import Integral, Interval, check_argument
+from ..constraints import Integral, Interval, Real, check_argument
 from ..errors import ParameterError, ShapeError, describe
 from ..runge_kutta import runge_kutta_step
 from ..symbolic import to_casadi
@@ -18,6 +20,11 @@ def from_equations(states: Sequence, inputs: Sequence, rhs: Sequence) -> ca.Func
     ``states`` / ``inputs`` are sympy symbols (their names are looked up in ``rhs``).
     A term with no symbolic form raises :class:`~discrepancy.errors.ExportError`.
     """
+    for name, symbols in (("states", states), ("inputs", inputs)):
+        if isinstance(symbols, (str, bytes)) or not all(isinstance(s, sp.Symbol)
+                                                        for s in symbols):
+            raise ParameterError(f"{name} must be a sequence of sympy symbols; got "
+                                 f"{symbols!r:.80}")
     if len(rhs) != len(states):
         raise ShapeError(f"rhs must have one expression per state ({len(states)}); got {len(rhs)}")
     x = ca.SX.sym("x", len(states))
@@ -58,6 +65,10 @@ def rk4_step(f: ca.Function, dt: float, substeps: int) -> ca.Function:
     """``F(x, u) -> x(t + dt)``: ``substeps`` classical Runge–Kutta steps with ``u`` held."""
     check_argument("substeps", substeps, Interval(Integral, 1, 1000))
     substeps = int(substeps)
+    check_argument("dt", dt, Interval(Real, 0, None, closed="neither"))
+    if not isinstance(f, ca.Function):
+        raise ParameterError(f"f must be a casadi.Function f(x, u) -> xdot (see as_casadi); "
+                             f"got {describe(f)}")
     n, r = f.size1_in(0), f.size1_in(1)
     x0 = ca.SX.sym("x", n)
     u = ca.SX.sym("u", r)

@@ -112,6 +112,9 @@ def learn_by_attempts(attempt: Callable, updater: DiscrepancyUpdater, *, first,
     """
     check_argument("max_attempts", max_attempts, Interval(Integral, 1))
     max_attempts = int(max_attempts)
+    if not callable(attempt):
+        raise ParameterError(f"attempt must be a callable attempt(model) -> (success, "
+                             f"log, result); got {describe(attempt)}")
     attempts, model = [], first
     for number in range(1, max_attempts + 1):
         success, log, result = attempt(model)

@@ -33,12 +33,13 @@ import casadi as ca
 import numpy as np
 
 from ..constraints import Integral, Interval, Options, Real, validate_params
+from ..data.validation import as_float_array, check_finite, check_vector
 from ..errors import ParameterError, ShapeError
 from .dynamics import as_casadi, rk4_step
 from .limits import Limits
 from .rti import RealTimeIteration
 from .tracking import tvlqr, weight_matrix
-from .trajectory import Plan
+from .trajectory import Plan, check_plan
 
 #: solvers and their default iterations per sample
 SOLVERS = {"ipopt": 100, "rti": 1}
@@ -159,11 +160,12 @@ class MPC:
         if x_ref.shape != (N + 1, n) or u_ref.shape != (N, r):
             raise ShapeError(f"x_ref must be ({N + 1}, {n}) and u_ref ({N}, {r}); got "
                              f"{x_ref.shape} and {u_ref.shape}")
-        u_prev = np.zeros(r) if u_prev is None else np.asarray(u_prev, dtype=float).ravel()
-        P = self.Q if P is None else P
-        x = np.asarray(x, dtype=float).ravel()
+        u_prev = np.zeros(r) if u_prev is None else check_vector("u_prev", u_prev, r)
+        P = self.Q if P is None else weight_matrix("P", P, n)
+        x = as_float_array("x", x).ravel()
         if x.shape != (n,):
             raise ShapeError(f"x must be the measured state ({n},); got shape {x.shape}")
+        check_finite("x", x)
         if warm is None or not (np.all(np.isfinite(warm.x)) and np.all(np.isfinite(warm.u))) \
                 or (self.solver == "rti" and not warm.success):
             xg, ug = x_ref.T, u_ref.T       # no warm start from a failed or diverged solve
@@ -206,6 +208,7 @@ class MPC:
         (same ``dt``), then hold its final state. Terminal weights: the cost-to-go of the
         TVLQR tracker of ``plan`` on this model with these ``Q``, ``R`` (``tracker``, computed
         if not given), which balances about the plan's end after it."""
+        check_plan(plan)
         if abs(plan.dt - self.dt) > 1e-9 * self.dt:
             raise ParameterError(f"plan.dt must equal the controller's dt {self.dt}; got "
                                  f"{plan.dt}")
@@ -248,6 +251,11 @@ class MPCLaw:
     converged: list = field(default_factory=list)
     _last: MPCSolution | None = None
     _u: np.ndarray | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.mpc, MPC):
+            raise ParameterError(f"mpc must be an MPC; got {type(self.mpc).__name__}")
+        check_plan(self.plan)
 
     def reset(self) -> None:
         """Forget the warm start, the last input and the records (a new run)."""

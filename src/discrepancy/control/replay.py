@@ -53,7 +53,10 @@ def swing_up_errors(x_final, *, angles, rates, angle_tol: float = ANGLE_TOL,
     """Final errors of a swing-up to the upright (all angles 0): ``|angle|`` (rad, wrapped
     to [-pi, pi)) of the state indices ``angles`` and ``|rate|`` of the indices ``rates``,
     keyed by index, and whether all meet the tolerances (``"success"``)."""
-    x = np.asarray(x_final, dtype=float).ravel()
+    x = check_array("x_final", np.reshape(as_float_array("x_final", x_final), (1, -1)))[0]
+    validate_params("swing_up_errors", {"angle_tol": angle_tol, "rate_tol": rate_tol},
+                    {"angle_tol": [Interval(Real, 0, None, closed="neither")],
+                     "rate_tol": [Interval(Real, 0, None, closed="neither")]})
     for name, indices in (("angles", angles), ("rates", rates)):
         if not all(isinstance(i, (int, np.integer)) and -len(x) <= i < len(x) for i in indices):
             raise ShapeError(f"{name} must be indices of the {len(x)} states; got "
@@ -107,6 +110,11 @@ def interval_defects(model, plan, *, rtol=1e-12, atol=1e-14) -> np.ndarray:
     """Per-interval integration error of a plan ``(N,)``: max-abs difference between the
     planned ``x[k+1]`` and a tight ODE solve over one interval from the planned ``x[k]``
     with ``u[k]`` held. Unlike a whole replay, these are not amplified by instability."""
+    from .trajectory import check_plan
+    check_plan(plan)
+    validate_params("interval_defects", {"rtol": rtol, "atol": atol},
+                    {"rtol": [Interval(Real, 0, 1, closed="right")],
+                     "atol": [Interval(Real, 0, None, closed="neither")]})
     step = _stepper(model, plan.dt, 1, rtol, atol)
     return np.array([np.max(np.abs(step(plan.x[k], plan.u[k])[-1] - plan.x[k + 1]))
                      for k in range(len(plan.u))])
@@ -151,7 +159,7 @@ def replay(model, x0, t, law, *, samples=1, rtol=1e-12, atol=1e-14) -> Run:
     if callable(law):
         feedback, table = law, None
     else:
-        table = np.asarray(law, dtype=float)
+        table = as_float_array("law", law)
         if table.ndim == 1:
             table = table[:, None]
         if table.shape[0] != n_int:

@@ -11,10 +11,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..errors import ShapeError
+from ..errors import ParameterError, ShapeError
 from .dynamics import as_casadi, rk4_step
 from .tracking import linearise
-from .trajectory import Plan
+from .trajectory import Plan, check_plan
 
 
 def state_transition(model, plan: Plan) -> np.ndarray:
@@ -35,8 +35,12 @@ def parameter_sensitivity(model, perturbation, plan: Plan) -> np.ndarray:
             e.g. ``[sin(phi1), 0, ...]`` for an error in a ``sin(phi1)`` coefficient.
         plan: the open-loop plan whose held inputs are replayed.
     """
+    check_plan(plan)
     f = as_casadi(model)
     n, r = f.size1_in(0), f.size1_in(1)
+    if not isinstance(perturbation, ca.Function):
+        raise ParameterError(f"perturbation must be a casadi.Function (x, u) -> ({n}, 1); got "
+                             f"{type(perturbation).__name__}")
     if perturbation.size_out(0) != (n, 1):
         raise ShapeError(f"perturbation must return ({n}, 1); got {perturbation.size_out(0)}")
     x, u, c = ca.SX.sym("x", n), ca.SX.sym("u", r), ca.SX.sym("c")

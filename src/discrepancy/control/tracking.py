@@ -15,9 +15,10 @@ import casadi as ca
 import numpy as np
 from scipy.linalg import solve_discrete_are
 
+from ..data.validation import as_float_array, check_vector
 from ..errors import InfeasibleError, ParameterError, ShapeError, describe
 from .dynamics import as_casadi, rk4_step
-from .trajectory import Plan
+from .trajectory import Plan, check_plan
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,13 @@ class Tracker:
     cost_to_go: np.ndarray | None = None
     final_gain: np.ndarray | None = None
     u_final: np.ndarray | None = None
+
+    def __post_init__(self):
+        check_plan(self.plan)
+        expected = (len(self.plan.u), self.plan.u.shape[1], self.plan.x.shape[1])
+        if np.shape(self.gains) != expected:
+            raise ShapeError(f"gains must be (N, r, n) = {expected} for this plan; got "
+                             f"{describe(self.gains)}")
 
     def __call__(self, k: int, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, dtype=float)
@@ -91,6 +99,7 @@ def step_jacobians(model, dt: float, substeps: int) -> ca.Function:
 
 def linearise(model, plan: Plan):
     """``A (N, n, n)``, ``B (N, n, r)``: Jacobians of the plan's discrete step along the plan."""
+    check_plan(plan)
     jac = step_jacobians(model, plan.dt, plan.substeps)
     n, r = plan.x.shape[1], plan.u.shape[1]
     N = len(plan.u)
@@ -105,7 +114,10 @@ def stationary_lqr(model, x_eq, u_eq, *, dt: float, substeps: int, Q, R):
     held-input step of ``model``; ``(None, None)`` if the Riccati equation has no
     stabilising solution there (e.g. not an equilibrium one can stabilise). ``Q``, ``R``:
     weights as :class:`~.mpc.MPC` takes them (numbers, diagonals or matrices, >= 0)."""
-    A, B = (np.array(m) for m in step_jacobians(model, dt, substeps)(x_eq, u_eq))
+    jacobians = step_jacobians(model, dt, substeps)
+    x_eq = check_vector("x_eq", x_eq, jacobians.size1_in(0))
+    u_eq = check_vector("u_eq", u_eq, jacobians.size1_in(1))
+    A, B = (np.array(m) for m in jacobians(x_eq, u_eq))
     Q, R = weight_matrix("Q", Q, A.shape[0]), weight_matrix("R", R, B.shape[1])
     try:
         P = solve_discrete_are(A, B, Q, R)
@@ -155,6 +167,11 @@ def tvlqr(model, plan: Plan, *, Q=None, R=1.0, Q_final=None, u_bounds=None,
         P = Qm + a.T @ P @ (a - b @ K)
         P = (P + P.T) / 2
         gains[k], costs[k] = K, P
-    bounds = None if u_bounds is None else np.asarray(u_bounds, dtype=float).reshape(r, 2)
+    bounds = None if u_bounds is None else as_float_array("u_bounds", u_bounds)
+    if bounds is not None and (bounds.size != 2 * r or np.isnan(bounds).any()
+                               or np.any(bounds.reshape(r, 2)[:, 0] > bounds.reshape(r, 2)[:, 1])):
+        raise ShapeError(f"u_bounds must be ({r}, 2) rows of (lower, upper) with lower <= upper; "
+                         f"got {describe(u_bounds)}")
+    bounds = None if bounds is None else bounds.reshape(r, 2)
     return Tracker(plan=plan, gains=gains, u_bounds=bounds, cost_to_go=costs,
                    final_gain=K_inf, u_final=uf)

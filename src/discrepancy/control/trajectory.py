@@ -38,6 +38,14 @@ PAPER_Q = (10.0, 10.0, 20.0, 1.0, 1.0, 0.1)
 PAPER_R = 1.0
 
 
+def check_plan(plan, name: str = "plan") -> None:
+    """ParameterError unless ``plan`` is a :class:`Plan` (checked before any CasADi work)."""
+    if not isinstance(plan, Plan):
+        from ..errors import ParameterError, describe
+        raise ParameterError(f"{name} must be a Plan (from plan_trajectory); got "
+                             f"{describe(plan)}")
+
+
 @dataclass(frozen=True)
 class Plan:
     """An optimised plan.

@@ -47,6 +47,11 @@ class Chunk:
 
     def rows(self, start: int, stop: int | None = None) -> Chunk:
         """Rows ``start:stop`` of every field, as a new chunk."""
+        end = self.n_rows if stop is None else stop
+        if not (isinstance(start, (int, np.integer)) and isinstance(end, (int, np.integer))
+                and start <= self.n_rows and end <= self.n_rows):
+            raise ParameterError(f"start and stop must be row numbers up to {self.n_rows} "
+                                 f"(negative: from the end); got {start!r} and {stop!r}")
         cut = slice(start, stop)
         return replace(self, **{f: None if getattr(self, f) is None else getattr(self, f)[cut]
                                 for f in FIELDS})

@@ -7,7 +7,7 @@ from ..base import Estimator
 from ..constraints import InstanceOf, Predicate, is_callable
 from ..data.trajectory import as_2d, as_times
 from ..differentiation import Differentiator, SavitzkyGolay, get_differentiation_method
-from ..errors import PriorError, ShapeError, describe
+from ..errors import ParameterError, PriorError, ShapeError, describe
 from ..symbolic import IDENTIFIER
 from .metrics import error_summary
 
@@ -15,6 +15,14 @@ NAMES = [None, Predicate(lambda v: isinstance(v, (list, tuple)) and len(v) > 0 a
     isinstance(n, str) and IDENTIFIER.match(n) for n in v), "a list of identifiers")]
 DIFFERENTIATION = [None, InstanceOf(Differentiator, "a Differentiator"),
                    InstanceOf(str, "a spec string")]
+
+
+def _finite_number(name: str, value) -> float:
+    """``value`` as a float, or ParameterError naming ``name`` (a finite real number)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)) \
+            or not np.isfinite(value):
+        raise ParameterError(f"{name} must be a finite number (J); got {value!r:.80}")
+    return float(value)
 
 
 class EnergyModel(Estimator):
@@ -60,6 +68,9 @@ class EnergyModel(Estimator):
 
     def variable_names(self, k: int) -> list[str]:
         """``[q1 ... qk, dq1 ... dqk]`` (or the given position names and ``d`` + each)."""
+        if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or k < 1:
+            raise ParameterError(f"k (the number of positions) must be an integer >= 1; got "
+                                 f"{k!r}")
         positions = list(self.position_names) if self.position_names is not None else \
             [f"q{i + 1}" for i in range(k)]
         return [*positions, *[f"d{name}" for name in positions]]
@@ -87,22 +98,27 @@ class EnergyModel(Estimator):
 
     def measured_delta_h(self, x, *, e0: float | None = None) -> np.ndarray:
         """``E0 - H_m(x)`` (J), ``(m,)``, with ``E0 = H_m(x[0])`` unless given."""
-        h = self._energy(as_2d("x", x))
-        return (h[0] if e0 is None else e0) - h
+        x = as_2d("x", x)
+        if x.shape[1] % 2:
+            raise ShapeError(f"x must hold positions then velocities, (m, 2k); got shape "
+                             f"{x.shape}")
+        h = self._energy(x)
+        return (h[0] if e0 is None else _finite_number("e0", e0)) - h
 
     def predict(self, q, t, *, dq=None, start: float = 0.0) -> np.ndarray:
         """Model ``dH`` (J) along a trajectory of positions ``q`` (velocities ``dq`` if
         measured), ``(m',)``; ``start``: its value at the first sample (see the subclass)."""
         self.check_is_fitted()
         x, t = self.states(q, t, dq=dq)
-        return self._predict(x, t, start)
+        return self._predict(x, t, _finite_number("start", start))
 
     def score(self, q, t, *, dq=None, start: float = 0.0) -> dict[str, float]:
         """Percentage errors (the paper's ``max|dH|`` and the window's ``dH`` range) of
         :meth:`predict` on a trajectory."""
         self.check_is_fitted()
         x, t = self.states(q, t, dq=dq)
-        return error_summary(self.measured_delta_h(x), self._predict(x, t, start))
+        return error_summary(self.measured_delta_h(x),
+                             self._predict(x, t, _finite_number("start", start)))
 
     def _predict(self, x, t, start: float) -> np.ndarray:
         """Hook: model ``dH`` for states ``x = [q, dq]``."""

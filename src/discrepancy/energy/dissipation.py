@@ -15,6 +15,7 @@ import numpy as np
 import sympy as sp
 from scipy.integrate import cumulative_trapezoid
 
+from ..data.validation import check_array, check_times
 from ..errors import ParameterError
 from ..symbolic import compile_numpy, symbol
 
@@ -42,6 +43,11 @@ class FrictionTerm:
     torque: str
     functions: Mapping[str, Callable] | None = field(default=None, compare=False)
     speed: sp.Expr | None = field(default=None, compare=False)
+
+    def __post_init__(self):
+        if not isinstance(self.power, sp.Basic):
+            raise ParameterError(f"FrictionTerm {self.name!r}: power must be a sympy "
+                                 f"expression; got {type(self.power).__name__}")
 
 
 #: Stribeck speeds (rad/s) of the default library: under the turning-point constraint a
@@ -105,8 +111,17 @@ def default_friction_library(velocity_names, *, joints=None,
     return tuple(terms)
 
 
+def _iterable(name: str, value):
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+        raise ParameterError(f"{name} must be a sequence; got {value!r:.80}")
+    return value
+
+
 def without_stribeck(terms) -> tuple[FrictionTerm, ...]:
     """The library without its Stribeck terms (those of :func:`default_friction_library`)."""
+    terms = tuple(_iterable("terms", terms))
+    if not all(isinstance(term, FrictionTerm) for term in terms):
+        raise ParameterError(f"terms must be a sequence of FrictionTerm; got {terms!r:.80}")
     return tuple(term for term in terms if not term.name.startswith("Stribeck "))
 
 
@@ -140,7 +155,10 @@ def support_loss_terms(pivot_force: Callable, state_names, *,
     motion under that force is dominated by damping moves at ``F / c_m`` and dissipates
     ``F^2 / c_m``; the coefficient ``c = 1 / c_m`` has the unit m / (N s).
     """
-    args = [symbol(n) for n in state_names]
+    if not callable(pivot_force):
+        raise ParameterError(f"pivot_force must be a callable x (m, n) -> (m, 2); got "
+                             f"{pivot_force!r:.80}")
+    args = [symbol(n) for n in _iterable("state_names", state_names)]
 
     def component(j, offset):
         return lambda *cols: pivot_force(np.column_stack(cols))[:, j] - offset
@@ -161,5 +179,8 @@ def integrated_powers(terms, values: np.ndarray, t: np.ndarray, names) -> np.nda
     ``values`` ``(m, len(names))`` holds the variables the terms' powers use (the joint
     speeds, or the whole state for terms such as :func:`support_loss_terms`).
     """
+    names = list(_iterable("names", names))
+    values = check_array("values", values, n_cols=len(names), allow_1d=True)
+    t = check_times("t", t, len(values))
     columns = [compile_numpy(term.power, list(names), term.functions)(values) for term in terms]
     return cumulative_trapezoid(np.column_stack(columns), t, axis=0, initial=0.0)

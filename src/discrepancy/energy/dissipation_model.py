@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..constraints import Integral, Interval, Options, Predicate, Real
-from ..errors import ParameterError
+from ..data.trajectory import as_2d, as_times
+from ..errors import ParameterError, ShapeError
 from ..symbolic import feature_name
 from .base import DIFFERENTIATION, ENERGY, NAMES, EnergyModel
 from .dissipation import FrictionTerm, default_friction_library, integrated_powers
@@ -127,6 +128,11 @@ class DissipationDiscrepancy(EnergyModel):
     def prepare(self, x, t) -> PreparedRecording:
         """The states ``x`` ``(m, 2k)`` at times ``t`` ready for fits of this model's library
         (:class:`~discrepancy.energy.record.PreparedRecording`)."""
+        x = as_2d("x", x)
+        if x.shape[1] % 2:
+            raise ShapeError(f"x must hold positions then velocities, (m, 2k); got shape "
+                             f"{x.shape}")
+        t = as_times("t", t, len(x))
         k = x.shape[1] // 2
         return PreparedRecording(self._energy, x, t, self._terms(k), self.variable_names(k))
 
@@ -137,6 +143,13 @@ class DissipationDiscrepancy(EnergyModel):
         :func:`~discrepancy.energy.blind_fit`; ``check=False`` skips ``soundness_`` (the
         constraints hold the law anyway; the check reports on it)."""
         self._validate_params()
+        if not isinstance(record, PreparedRecording):
+            raise ParameterError(f"record must be a PreparedRecording (from prepare); got "
+                                 f"{type(record).__name__}")
+        if isinstance(stop, (bool, np.bool_)) or not isinstance(stop, (int, np.integer)) \
+                or not 3 <= stop <= len(record.t):
+            raise ParameterError(f"stop must be an integer in [3, {len(record.t)}] (samples of "
+                                 f"the recording); got {stop!r}")
         k = record.x.shape[1] // 2
         terms = self._terms(k)
         columns = _columns(record.terms, terms)

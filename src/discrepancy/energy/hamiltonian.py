@@ -12,6 +12,9 @@ import warnings
 
 import numpy as np
 
+from ..data.validation import check_array
+from ..errors import ParameterError
+
 # Below this relative residual the library reproduces H_m to within ~0.1 % of its variation.
 SPAN_TOLERANCE = 1e-3
 
@@ -25,7 +28,8 @@ def energy_span_residual(theta: np.ndarray, energy: np.ndarray) -> float:
 
     About 0 when the library spans ``H_m`` along the data; 1 when it explains none of it.
     """
-    energy = np.asarray(energy, float)
+    theta = check_array("theta", theta, allow_1d=True)
+    energy = check_array("energy", energy, ndim=1, n_rows=theta.shape[0])
     design = np.column_stack([np.ones(len(energy)), theta])
     coef, *_ = np.linalg.lstsq(design, energy, rcond=None)
     spread = np.linalg.norm(energy - energy.mean())
@@ -35,6 +39,9 @@ def energy_span_residual(theta: np.ndarray, energy: np.ndarray) -> float:
 def check_span(theta: np.ndarray, energy: np.ndarray, *, tolerance: float = SPAN_TOLERANCE
                ) -> float:
     """Warn (:class:`EnergyTautologyWarning`) if the library spans ``H_m``; return the residual."""
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.number)) \
+            or not 0 < tolerance < 1:
+        raise ParameterError(f"tolerance must be a number in (0, 1); got {tolerance!r}")
     residual = energy_span_residual(theta, energy)
     if residual < tolerance:
         warnings.warn(

@@ -24,8 +24,9 @@ import numpy as np
 from ..base import clone
 from ..constraints import Integral, Interval, Real, check_argument
 from ..data.trajectory import as_2d, as_times
+from ..data.validation import check_array
 from ..differentiation import SavitzkyGolay
-from ..errors import ConvergenceError, DataError, ParameterError
+from ..errors import ConvergenceError, DataError, ParameterError, ShapeError
 from .dissipation import without_stribeck
 from .dissipation_model import DissipationDiscrepancy
 from .metrics import error_summary
@@ -98,7 +99,11 @@ class BlindFit:
         from the origins inside training, scaled by the forecast's own ``dH`` range. With
         ``n`` origins it is a band of nominal level ``(n - 1) / (n + 1)``; check its coverage
         (the law's form error is not random noise)."""
-        lead = np.asarray(t, float) - float(t[0])
+        t = check_array("t", t, ndim=1)
+        prediction = check_array("prediction", prediction, ndim=1, n_rows=len(t))
+        if len(t) == 0:
+            raise ShapeError("t must hold at least one time; got an empty array")
+        lead = t - t[0]
         worst = np.max(np.abs(self.lead_errors[self.chosen]), axis=0)
         width = np.interp(lead, self.lead_times, worst, right=worst[-1]) * np.ptp(prediction)
         return prediction - width, prediction + width
@@ -117,6 +122,7 @@ def default_procedures(model: DissipationDiscrepancy, training_seconds: float,
     the most recent half or 30 %: the regime a forecast continues) x cumulative or
     per-block energy loss (blocks of 1/32 of the training part) x terms chosen by the elbow
     of the training error or by forecasting its last 20 %."""
+    check_argument("training_seconds", training_seconds, Interval(Real, 0, None, closed="neither"))
     if libraries is None:
         terms = model._terms(n_positions)
         libraries = {"full library": terms, "no Stribeck": without_stribeck(terms)}

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..data.validation import check_array, check_times
+from ..errors import ParameterError, ShapeError
 from ..symbolic import compile_numpy
 from .dissipation import integrated_powers
 from .regression import Statistics, statistics
@@ -42,6 +44,11 @@ class PreparedRecording:
     """
 
     def __init__(self, energy, x: np.ndarray, t: np.ndarray, terms, names):
+        x = check_array("x", x)
+        if x.shape[1] % 2 or len(list(names)) != x.shape[1]:
+            raise ShapeError(f"x must hold positions then velocities (m, 2k), one column per "
+                             f"name of {list(names)}; got shape {x.shape}")
+        t = check_times("t", t, len(x))
         self.energy, self.x, self.t = energy, x, t
         self.terms, self.names = tuple(terms), list(names)
         k = x.shape[1] // 2
@@ -72,6 +79,10 @@ class PreparedRecording:
 
     def window_start(self, stop: int, seconds: float | None) -> int:
         """First sample of the last ``seconds`` before ``stop`` (0 for ``None``)."""
+        if isinstance(stop, (bool, np.bool_)) or not isinstance(stop, (int, np.integer)) \
+                or not 1 <= stop <= len(self.t):
+            raise ParameterError(f"stop must be a sample count in [1, {len(self.t)}]; got "
+                                 f"{stop!r}")
         if seconds is None:
             return 0
         return int(np.searchsorted(self.t[:stop], self.t[stop - 1] - seconds))

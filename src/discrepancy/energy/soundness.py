@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from ..data.validation import check_array, check_vector
+from ..errors import ParameterError, ShapeError, describe
 from ..symbolic import compile_numpy, symbol
 
 #: share of the holding torque a static friction may reach at a turning point
@@ -118,7 +120,7 @@ def turning_points(speed: np.ndarray) -> np.ndarray:
     ``MAX_DWELL`` of the median time between reversals (a longer dwell may be a stop, which
     says nothing against static friction). Each is the sample of smallest ``|speed|`` in
     between; noise around a joint at rest is no turning point."""
-    return reversals(speed)[0]
+    return reversals(check_array("speed", speed, ndim=1))[0]
 
 
 def reversals(speed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -188,6 +190,13 @@ def holding_torques(energy, x: np.ndarray, direction: np.ndarray) -> np.ndarray:
     """``|lambda|`` ``(m,)`` (N m): the torque a joint of speed ``(direction * dq).sum(-1)``
     must exert to stay at rest at states ``x`` ``(m, 2k)`` while the other joints move freely
     under the conservative model ``energy`` (see the module's docstring)."""
+    if not callable(energy):
+        raise ParameterError(f"energy must be a callable H(x) -> (m,); got {describe(energy)}")
+    x = check_array("x", x)
+    if x.shape[1] % 2:
+        raise ShapeError(f"x must hold positions then speeds (an even number of columns); "
+                         f"got shape {x.shape}")
+    direction = check_vector("direction", direction, x.shape[1] // 2)
     k = x.shape[1] // 2
     q, v = x[:, :k], x[:, k:]
     h = 1e-6 * max(1.0, float(np.max(np.abs(q))))

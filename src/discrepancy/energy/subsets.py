@@ -20,6 +20,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter1d
 
 from ..constraints import Integral, Interval, check_argument
+from ..data.validation import check_array
 from ..errors import ParameterError
 from .regression import statistics
 from .soundness import Limits
@@ -80,6 +81,8 @@ def select_terms(features: np.ndarray, delta_h: np.ndarray, *, max_terms: int = 
     Returns ``(support, candidates)`` with ``candidates`` the sorted ``(score, support)``
     list; ``support`` is empty when no law fits with positive coefficients.
     """
+    features = check_array("features", features, allow_1d=True)
+    delta_h = check_array("delta_h", delta_h, ndim=1, n_rows=features.shape[0])
     m, p = features.shape
     check_argument("max_terms", max_terms, Interval(Integral, 1))
     max_terms = min(int(max_terms), p)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constraints import validate_params
+from ..data.validation import check_array
 from ..errors import ParameterError
 from ..models.uncertainty import BOOTSTRAP_CONSTRAINTS, CoefficientUncertainty
 from .regression import block_weights, nonnegative_fit
@@ -37,6 +38,7 @@ class DissipationUncertainty(CoefficientUncertainty):
         """Every resample's model ``dH`` (J), ``(R, m)``, from the terms' integrated powers
         ``features`` ``(m, k)``; ``continued``: with each resample's offset (the training
         fit continued), else starting at 0 (a new trajectory)."""
+        features = check_array("features", features, n_cols=self.samples.shape[2])
         start = self.offsets[:, None] if continued else 0.0
         return start + self.samples[:, 0, :] @ features.T
 

@@ -5,6 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import ParameterError
+
 
 @dataclass(frozen=True)
 class FilterState:
@@ -74,6 +76,10 @@ class FilterResult:
 
     def state(self, i: int = -1) -> FilterState:
         """The filtered belief at sample ``i`` as a :class:`FilterState` (to continue online)."""
+        if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) \
+                or not -len(self.t) <= i < len(self.t):
+            raise ParameterError(f"i must be a sample index in [{-len(self.t)}, {len(self.t)}); "
+                                 f"got {i!r}")
         i = range(len(self.t))[i]
         return FilterState(self.x[i].copy(), self.P[i].copy(), self.innovations[i].copy(),
                            self.innovation_cov[i].copy(),

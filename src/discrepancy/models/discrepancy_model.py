@@ -269,6 +269,9 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
     def residual(self, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         """``(Z, y)``: variables ``[x_smooth, u]`` ``(m, n + r)`` and ``x_dot - f_m`` ``(m, n)``."""
         self.check_is_fitted()
+        if not isinstance(trajectory, Trajectory):
+            raise ParameterError(f"trajectory must be a Trajectory (see "
+                                 f"discrepancy.data.as_trajectories); got {describe(trajectory)}")
         return self.setup_.residual(trajectory)
 
     # --------------------------------------------------------------- evaluation

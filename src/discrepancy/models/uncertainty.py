@@ -76,11 +76,16 @@ class CoefficientUncertainty:
 
     def interval(self, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
         """Percentile interval ``(low, high)``, each ``(n, p)``."""
+        validate_params("interval", {"level": level},
+                        {"level": [Interval(Real, 0, 1, closed="neither")]})
         q = (1 - level) / 2
         return np.quantile(self.samples, q, axis=0), np.quantile(self.samples, 1 - q, axis=0)
 
     def table(self, precision: int = 4, min_inclusion: float = 0.05) -> str:
         """Table of terms active in the estimate or in >= ``min_inclusion`` of resamples."""
+        validate_params("table", {"precision": precision, "min_inclusion": min_inclusion},
+                        {"precision": [Interval(Integral, 0, 17)],
+                         "min_inclusion": [Interval(Real, 0, 1)]})
         low, high = self.interval()
         std, inc = self.std, self.inclusion_probability
         lines = [f"{'state':>8} {'term':>16} {'coef':>11} {'std':>10} {'95% interval':>25} "

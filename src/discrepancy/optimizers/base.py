@@ -23,6 +23,13 @@ def solve_normal(gram: np.ndarray, rhs: np.ndarray, alpha: float = 0.0) -> np.nd
     Falls back to a minimum-norm least-squares solve when ``G + αI`` is singular or so
     ill-conditioned that scipy would warn (dense candidate supports often are).
     """
+    gram, rhs = np.asarray(gram, dtype=float), np.asarray(rhs, dtype=float)
+    if gram.ndim != 2 or gram.shape[0] != gram.shape[1] or rhs.shape[:1] != gram.shape[:1] \
+            or rhs.ndim > 2:
+        raise ShapeError(f"gram must be square (p, p) and rhs (p,) or (p, k); got shapes "
+                         f"{gram.shape} and {rhs.shape}")
+    if not (np.isfinite(gram).all() and np.isfinite(rhs).all() and np.isfinite(alpha)):
+        raise DataError("gram, rhs and alpha must be finite; found a NaN or infinity")
     a = gram + alpha * np.eye(gram.shape[0])
     d = np.sqrt(np.diag(a))
     d[d == 0] = 1.0

@@ -253,11 +253,13 @@ class PDEDiscrepancyModel(Estimator):
 
     def equations(self, precision: int = 3) -> list[str]:
         """Right-hand sides as text: ``prior - 1.000 u_xx``."""
+        self.check_is_fitted()
         return equations(ExportView(self), precision)
 
     def print(self, precision: int = 3) -> None:
         """One line per field, ``(u)_t = prior + 0.050 u_xx``, then how the derivatives were
         chosen (a ``#`` line) when they were chosen from the data."""
+        self.check_is_fitted()
         for name, eq in zip(self.field_names_, self.equations(precision), strict=True):
             print(f"({name})_t = {eq}")
         choice = self.differentiation_choice_
@@ -268,10 +270,12 @@ class PDEDiscrepancyModel(Estimator):
     def to_sympy(self, part: str | None = None, *, derivatives: bool = False):
         """Right-hand sides as sympy expressions (``part`` as for ODE models); with
         ``derivatives=True`` in ``sympy.Derivative`` form of functions ``u(t, x)``."""
+        self.check_is_fitted()
         return to_sympy(self, part, derivatives)
 
     def to_latex(self, precision: int = 4, part: str | None = None) -> str:
         """LaTeX ``aligned`` block: ``u_{t} &= - u u_{x} - 1.0 u_{xx} ...``."""
+        self.check_is_fitted()
         return to_latex(self, precision, part)
 
 

@@ -85,6 +85,10 @@ def procedure_figure(choice, *, title: str = ""):
     """Every candidate of :func:`discrepancy.choose_procedure`: its forecast error at each
     origin (dots) and their mean with one standard error (bar), the chosen ringed and the
     prior alone's mean as a dashed line."""
+    if not hasattr(choice, "scores") or not hasattr(choice, "chosen"):
+        from ..errors import ParameterError, describe
+        raise ParameterError(f"choice must be what choose_procedure returns; got "
+                             f"{describe(choice)}")
     names = list(choice.scores)
     fig, ax = plt.subplots(figsize=(max(5.0, 0.9 * len(names) + 2), 3.6))
     for i, name in enumerate(names):

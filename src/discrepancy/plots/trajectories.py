@@ -1,8 +1,22 @@
 """Figures of measured data, discrepancies and validation runs (like the paper's Fig. 2)."""
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import matplotlib.pyplot as plt
 import numpy as np
+
+from ..data.validation import as_float_array
+from ..errors import ParameterError, ShapeError, describe
+
+
+def _table(name: str, a, m: int, n: int) -> np.ndarray:
+    """``a`` as an ``(m, n)`` float array (non-finite values allowed: a diverged run plots)."""
+    arr = as_float_array(name, a)
+    if arr.shape != (m, n):
+        raise ShapeError(f"{name} must be ({m}, {n}) (samples, states); got shape {arr.shape}")
+    return arr
+
 
 COLORS = {"true": "k", "measured": "0.55", "prior": "tab:red", "hybrid": "tab:blue"}
 
@@ -15,6 +29,10 @@ def discrepancy_figure(t, x_measured, residual, learned, state_names, *, title="
         learned: ``g(x)`` of the fitted model ``(m, n)``.
     """
     n = len(state_names)
+    t = as_float_array("t", t).reshape(-1)
+    x_measured, residual, learned = (
+        _table(name, a, len(t), n) for name, a in
+        (("x_measured", x_measured), ("residual", residual), ("learned", learned)))
     fig, axes = plt.subplots(n, 2, figsize=(11, 2.6 * n), squeeze=False, sharex=True)
     for i, name in enumerate(state_names):
         axes[i, 0].plot(t, x_measured[:, i], color=COLORS["measured"], lw=0.8)
@@ -37,6 +55,11 @@ def discrepancy_figure(t, x_measured, residual, learned, state_names, *, title="
 def validation_figure(t, runs: dict[str, np.ndarray], state_names, *, title=""):
     """Phase portrait and time series of runs ``{"true": x, "prior": x, "hybrid": x}``."""
     n = len(state_names)
+    if not isinstance(runs, Mapping) or not runs:
+        raise ParameterError(f"runs must be a non-empty mapping of labels to states (m, n); "
+                             f"got {describe(runs)}")
+    t = as_float_array("t", t).reshape(-1)
+    runs = {label: _table(f"runs[{label!r}]", x, len(t), n) for label, x in runs.items()}
     fig, axes = plt.subplots(1, 1 + n, figsize=(4.2 * (1 + n), 3.6))
     styles = {"true": dict(lw=2.2, alpha=0.5), "prior": dict(lw=1, ls=":"),
               "hybrid": dict(lw=1.2, ls="--")}

@@ -15,6 +15,9 @@ def uncertainty_figure(unc, *, truth: dict | None = None, min_inclusion: float =
         min_inclusion: also show inactive terms selected in at least this fraction of resamples.
         max_terms: at most this many panels (active terms first).
     """
+    if not hasattr(unc, "interval") or not hasattr(unc, "inclusion_probability"):
+        from ..errors import ParameterError, describe
+        raise ParameterError(f"unc must be a model's bootstrap() result; got {describe(unc)}")
     low, high = unc.interval()
     inc = unc.inclusion_probability
     rows = [(i, j) for i in range(len(unc.state_names)) for j in range(len(unc.feature_names))

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from ..errors import ShapeError
 from ..libraries import CustomLibrary, PolynomialLibrary
 from ..symbolic import symbol
 
@@ -105,6 +106,9 @@ def default_libraries(state_names, input_names, x: np.ndarray, u: np.ndarray | N
     them, other states get polynomial and root terms only."""
     names = [*state_names, *input_names]
     columns = x if u is None else np.hstack([x, u])
+    if np.ndim(columns) != 2 or np.shape(columns)[1] != len(names):
+        raise ShapeError(f"state_names and input_names name {len(names)} variables; x and u "
+                         f"hold {np.shape(columns)[1:]} columns")
     measured = names if measured is None else list(measured)
     data = {n: columns[:, names.index(n)] for n in measured if n in names}
     linear = PolynomialLibrary(1)
