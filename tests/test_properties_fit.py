@@ -80,7 +80,7 @@ def test_fit_equals_numpy_least_squares_or_refuses(sample, degree, bias):
         kept = a[:, support]
         norms = np.linalg.norm(kept, axis=0)
         assert np.all(norms == 0) or np.linalg.cond(kept / np.where(norms > 0, norms, 1)) \
-            ** 2 > dc.models.conditioning.LIMIT / 10
+            ** 2 > dc.models.core.conditioning.LIMIT / 10
         return
     residual, best = np.linalg.norm(a @ model.coef_.T - b), np.linalg.norm(a @ reference - b)
     scale = np.linalg.norm(b) + 1e-300
