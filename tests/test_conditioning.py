@@ -7,7 +7,7 @@ import pytest
 
 import discrepancy as dc
 from discrepancy.errors import IllConditionedWarning
-from discrepancy.models.conditioning import collinear_terms
+from discrepancy.models.core.conditioning import collinear_terms
 
 
 def test_an_input_equal_to_a_state_is_named():

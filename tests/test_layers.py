@@ -73,3 +73,19 @@ def test_lower_layers_never_import_higher_ones():
             other = target.split(".")[1] if "." in target else None
             if layer in rank and other in rank:
                 assert rank[other] <= rank[layer], f"{module} imports {target}"
+
+
+def test_model_parts_never_import_the_model_or_a_higher_part():
+    # inside models/: core/ and simulate/ are the parts below, outputs/ and files/ build on
+    # them (never on each other), and only the model class (discrepancy_model.py) takes all
+    rank = {"core": 0, "simulate": 0, "outputs": 1, "files": 1, "discrepancy_model": 2}
+    for module, targets in graph().items():
+        parts = module.split(".")
+        if parts[1:2] != ["models"] or len(parts) < 3 or parts[2] not in rank:
+            continue
+        for target in targets:
+            other = target.split(".")
+            if other[1:2] != ["models"] or len(other) < 3 or other[2] == parts[2]:
+                continue
+            assert other[2] in rank, f"{module} imports {target}"
+            assert rank[other[2]] < rank[parts[2]], f"{module} imports {target}"

@@ -539,7 +539,7 @@ def test_a_failing_save_keeps_the_previous_file(plain_model, tmp_path):
 
 _SAVE_FOREVER = """
 import os, sys, time
-import discrepancy.models.model_file as mf
+import discrepancy.models.files.model_file as mf
 real = os.fsync
 def slow_fsync(fd):           # the new content is written but not yet in place
     print("writing", flush=True)
@@ -571,7 +571,7 @@ def test_saving_to_a_folder_or_a_missing_folder_is_a_clear_error(plain_model, tm
 
 
 def test_oversized_files_are_refused_before_parsing(tmp_path):
-    from discrepancy.models import model_file
+    from discrepancy.models.files import model_file
 
     path = tmp_path / "big.json"
     with open(path, "w") as f:

@@ -13,7 +13,7 @@ from sklearn.base import clone
 
 import discrepancy as dc
 from discrepancy.errors import ModelFileError
-from discrepancy.models.model_parameters import CODECS, STORED_ELSEWHERE
+from discrepancy.models.files.model_parameters import CODECS, STORED_ELSEWHERE
 from discrepancy.symbolic import symbol
 
 

@@ -1,7 +1,7 @@
 """The output-error path's choice: the library's one-standard-error rule on held-out errors."""
 import numpy as np
 
-from discrepancy.models.output_fit import SupportScore, choose
+from discrepancy.models.outputs.output_fit import SupportScore, choose
 
 
 def _score(n_terms, mse, se):

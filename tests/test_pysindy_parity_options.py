@@ -204,7 +204,7 @@ def test_ensembles_equal_pysindys_from_the_same_draws(lorenz, kw):
 
 
 def test_an_ensemble_gives_the_bootstraps_table_and_intervals(lorenz):
-    from discrepancy.models.uncertainty import CoefficientUncertainty
+    from discrepancy.models.core.uncertainty import CoefficientUncertainty
 
     x, t = lorenz
     x = x + 0.05 * np.random.default_rng(3).normal(size=x.shape)

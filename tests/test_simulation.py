@@ -5,7 +5,7 @@ import sympy as sp
 
 import discrepancy as dc
 from discrepancy.errors import ParameterError, SimulationError
-from discrepancy.models.simulation import integrate
+from discrepancy.models.simulate.simulation import integrate
 
 X1, X2 = sp.symbols("x1 x2")
 

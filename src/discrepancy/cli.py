@@ -141,7 +141,7 @@ def _placeholder_prior(x, u=None):
 
 def _stored(path):
     """A model file's content and whether its prior is a callable (not stored)."""
-    from .models.model_file import read_json
+    from .models.files.model_file import read_json
 
     doc = read_json(path)
     prior = doc.get("prior") if isinstance(doc, dict) else None

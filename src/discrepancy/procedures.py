@@ -34,7 +34,7 @@ from .fitting.setup import resolve_names
 from .hybrid.outputs import OutputMap
 from .libraries import FeatureLibrary
 from .models import DiscrepancyModel
-from .models.output_checks import simulate_quietly, state_count
+from .models.outputs.output_checks import simulate_quietly, state_count
 from .optimizers.selection import one_standard_error
 from .selection.candidate_libraries import default_libraries
 from .selection.choice import TOLERANCE

@@ -86,7 +86,7 @@ def _casadi_stepper(f: ca.Function, dt, samples, rtol, atol):
 def _scipy_stepper(f: Callable, dt, samples, rtol, atol):
     """One hold interval by the package's integrator (DOP853, status and divergence
     checked there)."""
-    from ..models.simulation import integrate
+    from ..models.simulate.simulation import integrate
 
     grid = np.linspace(0.0, dt, samples + 1)
 

@@ -18,7 +18,7 @@ import numpy as np
 from ..constraints import validate_params
 from ..data.validation import check_array
 from ..errors import ParameterError
-from ..models.uncertainty import BOOTSTRAP_CONSTRAINTS, CoefficientUncertainty
+from ..models.core.uncertainty import BOOTSTRAP_CONSTRAINTS, CoefficientUncertainty
 from .regression import block_weights, nonnegative_fit
 
 
@@ -26,7 +26,7 @@ from .regression import block_weights, nonnegative_fit
 class DissipationUncertainty(CoefficientUncertainty):
     """Bootstrap distribution of a dissipation law's coefficients and of its offset.
 
-    Attributes (besides :class:`~discrepancy.models.uncertainty.CoefficientUncertainty`'s):
+    Attributes (besides :class:`~discrepancy.models.core.uncertainty.CoefficientUncertainty`'s):
         offsets: each resample's offset ``c`` (J), ``(R,)``: with it a resample reproduces
             its own fit of the training curve, so a forecast that continues the training fit
             carries the uncertainty of where that fit hands over.

@@ -6,7 +6,7 @@ the seam between the model and the ways data arrive: the in-memory fit, the chun
 (:mod:`discrepancy.fitting.streaming`) and Dask (:mod:`discrepancy.fitting.distributed`) all
 compute statistics with the same set-up and hand them to the model's ``fit_statistics``. The
 set-up knows no model: the model resolves its parameters into one
-(:func:`discrepancy.models.resolve.resolve_setup`).
+(:func:`discrepancy.models.core.resolve.resolve_setup`).
 """
 from __future__ import annotations
 

@@ -27,26 +27,26 @@ from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..optimizers.wrapped import REGRESSOR
 from ..symbolic import compile_numpy, feature_name
-from .arguments import keywords_only, require_t
-from .checks import checked_discrepancy, pairs
-from .conditioning import warn_if_ill_conditioned
-from .discrete import iterate
-from .export import choice_line, equations, to_casadi, to_latex, to_sympy
-from .fast_simulation import compiled_stepper
-from .model_file import corrupted, decode, encode, read_json, write_json
-from .model_parameters import FITTED, check_parameters
-from .output_methods import OutputErrorMethods
-from .prediction import checked_states, iterate_ahead, predict_ahead
-from .prediction_error_methods import PredictionErrorMethods
-from .pysindy_interface import PySINDyInterface
-from .region import guard, guard_run, region_of
-from .resolve import resolve_setup
-from .scoring import score
-from .simulate_arguments import map_options, simulation_options
-from .simulation import integrate
-from .term_choice import announce, choose_terms
-from .term_constraints import Constraints
-from .uncertainty import bootstrap, predict_interval, simulate_interval
+from .core.arguments import keywords_only, require_t
+from .core.checks import checked_discrepancy, pairs
+from .core.conditioning import warn_if_ill_conditioned
+from .core.prediction_error_methods import PredictionErrorMethods
+from .core.pysindy_interface import PySINDyInterface
+from .core.resolve import resolve_setup
+from .core.scoring import score
+from .core.term_choice import announce, choose_terms
+from .core.term_constraints import Constraints
+from .core.uncertainty import bootstrap, predict_interval, simulate_interval
+from .files.export import choice_line, equations, to_casadi, to_latex, to_sympy
+from .files.model_file import corrupted, decode, encode, read_json, write_json
+from .files.model_parameters import FITTED, check_parameters
+from .outputs.output_methods import OutputErrorMethods
+from .simulate.discrete import iterate
+from .simulate.fast_simulation import compiled_stepper
+from .simulate.prediction import checked_states, iterate_ahead, predict_ahead
+from .simulate.region import guard, guard_run, region_of
+from .simulate.simulate_arguments import map_options, simulation_options
+from .simulate.simulation import integrate
 
 _SPEC = InstanceOf(str, "a spec string")
 _NAMES = [None, InstanceOf(str, "a name"),
@@ -75,14 +75,14 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         input_names: names of the r inputs (default ``u`` for one, ``u1 ... ur`` for more).
         discrete_time: a map ``x[k+1] = f_m(x[k], u[k]) + g(x[k], u[k])`` instead of an ODE
             (no derivatives; ``simulate`` iterates the map; ``t`` is ignored by ``fit``).
-        constraints: a :class:`~discrepancy.models.term_constraints.Constraints`: equations
+        constraints: a :class:`~discrepancy.models.core.term_constraints.Constraints`: equations
             without correction, terms confined to some equations, linear (in)equalities on
             coefficients by name (needs an optimizer that takes constraints: STLSQ).
         selection: how the terms are chosen. ``"auto"`` (default): by forecasts when the
             optimizer chooses its own sparsity (``STLSQ(threshold="auto")``, the default):
             equation error proposes supports, free-run and k-step forecasts from origins in
             held-out blocks of the training data decide, and the prior alone is always a
-            candidate (:mod:`discrepancy.models.term_choice`); a fixed threshold or another
+            candidate (:mod:`discrepancy.models.core.term_choice`); a fixed threshold or another
             optimizer is used as given. ``"forecast"``: also a given optimizer's answer is
             compared with the prior alone. ``"optimizer"``: the optimizer's own choice.
 
@@ -92,8 +92,8 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
     ``differentiation_method_``; ``prior_only_`` (no learned term), ``forecast_selection_``
     (every candidate's forecast score when forecasts chose, else None) and ``region_``
     (the range of each state and input fitted on, a
-    :class:`~discrepancy.models.region.FittedRegion`: ``simulate`` and ``predict`` warn when
-    they leave it).
+    :class:`~discrepancy.models.simulate.region.FittedRegion`: ``simulate`` and ``predict`` warn
+    when they leave it).
     """
 
     _parameter_constraints = {
@@ -332,7 +332,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         ``u`` is an array ``(k, r)`` sampled at ``t`` (between samples ``u_hold="linear"``,
         ``"zoh"`` or ``"bandlimited"``, see :mod:`discrepancy.hybrid.inputs`) or a callable
         ``u(t) -> (r,)``. Keyword arguments go to
-        :func:`discrepancy.models.simulation.integrate` (``method``, ``rtol``, ``atol``,
+        :func:`discrepancy.models.simulate.simulation.integrate` (``method``, ``rtol``, ``atol``,
         ``substeps``, ``max_evaluations``); a model with a discontinuous term (``sign``) is
         stepped with fixed-step RK4 on ``t`` unless a method is given. ``method="rk4"`` with
         a sampled or no input runs compiled by CasADi when it is installed and the model can
@@ -341,7 +341,7 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         out of its evaluation budget raises SimulationError with the partial trajectory.
         Returns ``(k, n)``. PySINDy's ``integrator`` (``"solve_ivp"``, ``"odeint"``),
         ``integrator_kws``, ``interpolator`` and ``interpolator_kws`` are taken as PySINDy
-        takes them (:mod:`discrepancy.models.simulate_arguments`). A discrete-time model
+        takes them (:mod:`discrepancy.models.simulate.simulate_arguments`). A discrete-time model
         iterates its map: ``t`` is the number of states to return (row 0 is ``x0``), ``u``
         has one row (or call ``u(k)``) per step and ``stop_condition(x) -> bool`` ends the
         run at the first state for which it is true (that state included), as in PySINDy.
@@ -468,9 +468,9 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         """Uncertainty of every term: a block bootstrap of the fit on these data.
 
         ``method="wild"`` (repeat the experiment with new noise) or ``"pairs"`` (also
-        resample which states were visited); see :mod:`discrepancy.models.uncertainty`.
+        resample which states were visited); see :mod:`discrepancy.models.core.uncertainty`.
 
-        Returns a :class:`~discrepancy.models.uncertainty.CoefficientUncertainty` with
+        Returns a :class:`~discrepancy.models.core.uncertainty.CoefficientUncertainty` with
         ``std``, ``interval()``, ``inclusion_probability`` and a printable ``table()``.
         """
         keywords_only("bootstrap", args, "u, x_dot and the options")

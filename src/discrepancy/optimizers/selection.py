@@ -103,7 +103,7 @@ def one_standard_error(error, se, sizes) -> int:
     by the lower error) whose mean ``error`` is within one standard error ``se`` of the
     best's. The one implementation of the rule (the threshold path here, forecast scores in
     :mod:`discrepancy.selection`, output-error supports in
-    :mod:`discrepancy.models.output_fit`)."""
+    :mod:`discrepancy.models.outputs.output_fit`)."""
     error = np.asarray(error, dtype=float)
     best = int(np.argmin(error))
     ok = [j for j in range(len(error)) if error[j] <= error[best] + se[best]]

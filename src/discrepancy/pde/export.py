@@ -10,7 +10,7 @@ import sympy as sp
 
 from ..constraints import Integral, Interval, validate_params
 from ..libraries.pde import parse_derivative
-from ..models.export import discrepancy_expressions, exported_part
+from ..models.files.export import discrepancy_expressions, exported_part
 from ..symbolic import symbol
 
 

@@ -13,7 +13,7 @@ from ..differentiation import Differentiator, FiniteDifference
 from ..differentiation.spatial import SpatialDifferentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
 from ..libraries import FeatureLibrary, PolynomialLibrary
-from ..models.export import equations
+from ..models.files.export import equations
 from ..optimizers import GramStatistics, Optimizer
 from ..symbolic import compile_numpy, feature_name
 from .distributed import dask_statistics

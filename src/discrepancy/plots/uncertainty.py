@@ -10,7 +10,7 @@ def uncertainty_figure(unc, *, truth: dict | None = None, min_inclusion: float =
     """One histogram per term (own scale): bootstrap samples, estimate, 95 % interval, truth.
 
     Args:
-        unc: a :class:`~discrepancy.models.uncertainty.CoefficientUncertainty`.
+        unc: a :class:`~discrepancy.models.core.uncertainty.CoefficientUncertainty`.
         truth: optional ``{(state, term): value}`` drawn as a black line.
         min_inclusion: also show inactive terms selected in at least this fraction of resamples.
         max_terms: at most this many panels (active terms first).

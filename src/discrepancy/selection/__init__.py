@@ -10,7 +10,7 @@ models: it works on a fit's set-up and statistics and knows no model class.
 * :func:`default_libraries`: candidate libraries from the data and the prior, which
   :func:`discrepancy.choose_procedure` (:mod:`discrepancy.procedures`, above the models)
   compares as whole procedures; output-error fits are judged in
-  :mod:`discrepancy.models.output_checks`.
+  :mod:`discrepancy.models.outputs.output_checks`.
 """
 from .candidate_libraries import default_libraries
 from .choice import ForecastSelection

@@ -20,7 +20,7 @@ turns non-finite is stopped and scores :data:`CAP` per lead from then on, so one
 candidate cannot make every mean infinite.
 
 Written in numpy rather than with the compiled CasADi stepper of
-:mod:`discrepancy.models.fast_simulation`: CasADi is an optional extra and the default fit
+:mod:`discrepancy.models.simulate.fast_simulation`: CasADi is an optional extra and the default fit
 must not need it, and with every candidate and origin in one batch the per-step overhead
 is shared (the default fit measured 2.5-3.5x the equation-error choice on 2500-10000
 samples, ``benchmarks/bench_selection.py``).

@@ -222,10 +222,10 @@ class DoublePendulum(System):
     def simulate(self, x0, t, *, rtol: float = 1e-10, atol: float = 1e-10) -> np.ndarray:
         """Integrate from ``x0`` ``(4,)`` and return the states at times ``t`` ``(m,)``, ``(m, 4)``.
 
-        Uses :func:`discrepancy.models.simulation.integrate` with scipy's DOP853 and tight
+        Uses :func:`discrepancy.models.simulate.simulation.integrate` with scipy's DOP853 and tight
         tolerances (the energy tests rely on them).
         """
-        from ..models.simulation import integrate
+        from ..models.simulate.simulation import integrate
 
         return integrate(lambda x, u: self.rhs(x), x0, t, n_states=4, n_inputs=0,
                          method="DOP853", rtol=rtol, atol=atol)

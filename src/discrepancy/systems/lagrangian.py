@@ -169,7 +169,7 @@ class LagrangianSystem(System):
     def simulate(self, x0, t, *, u=None, rtol: float = 1e-10, atol: float = 1e-10) -> np.ndarray:
         """Integrate the true system from ``x0`` ``(2k,)``; states at times ``t``, ``(m, 2k)``.
         ``u``: inputs ``(m, r)`` at ``t`` (held linearly) or a callable ``u(t)``."""
-        from ..models.simulation import integrate
+        from ..models.simulate.simulation import integrate
 
         return integrate(self.rhs, x0, t, u=u, n_states=len(self.state_names),
                          n_inputs=len(self.input_names), method="DOP853", rtol=rtol, atol=atol)

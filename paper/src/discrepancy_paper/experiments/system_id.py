@@ -19,7 +19,7 @@ def support_path_figure(path):
     one standard error, the chosen support marked."""
     import matplotlib.pyplot as plt
 
-    from discrepancy.models.output_fit import choose
+    from discrepancy.models.outputs.output_fit import choose
 
     terms = np.array([s.n_terms for s in path])
     error = np.array([s.heldout_error for s in path])

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..data.validation import check_array
-from ..errors import ConvergenceError, ParameterError, ShapeError
-from ..resources import check_memory, n_bytes
+from ...data.validation import check_array
+from ...errors import ConvergenceError, ParameterError, ShapeError
+from ...resources import check_memory, n_bytes
 
 
 def iterate(step, x0, steps, u, n_states: int, n_inputs: int, *,

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ExtrapolationWarning
+from ...errors import ExtrapolationWarning
 
 #: excursions smaller than this fraction of a variable's range are not reported
 MARGIN = 0.01

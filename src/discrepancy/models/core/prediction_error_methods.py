@@ -3,9 +3,9 @@ one-step innovations of a Kalman filter (see :mod:`discrepancy.estimation.pem`),
 filter of the fitted model."""
 from __future__ import annotations
 
-from ..errors import NotFittedError, ParameterError
-from ..estimation import ExtendedKalmanFilter, UnscentedKalmanFilter
-from ..estimation.pem import fit_prediction_error
+from ...errors import NotFittedError, ParameterError
+from ...estimation import ExtendedKalmanFilter, UnscentedKalmanFilter
+from ...estimation.pem import fit_prediction_error
 from .arguments import keywords_only
 
 

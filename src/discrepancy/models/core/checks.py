@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..data.trajectory import Trajectory, as_trajectories
-from ..errors import ShapeError, describe
-from ..fitting.accumulate import Names, not_finite
+from ...data.trajectory import Trajectory, as_trajectories
+from ...errors import ShapeError, describe
+from ...fitting.accumulate import Names, not_finite
 
 
 def model_data(model, x, t=None, u=None, x_dot=None, sample_weight=None) -> list[Trajectory]:

@@ -3,7 +3,7 @@
 When only some states (or functions of them) are recorded, the derivative of every state
 is not available and the usual regression cannot be formed. Here the hybrid model is
 simulated from an estimated initial state with the measured input (RK4 at the input's
-stage times, see :mod:`discrepancy.models.shooting`) and its coefficients and initial
+stage times, see :mod:`discrepancy.models.outputs.shooting`) and its coefficients and initial
 states are chosen to minimise the simulation error of the recorded outputs (Gauss–Newton
 with a trust region: scipy's ``least_squares`` on exact CasADi derivatives).
 
@@ -21,9 +21,9 @@ import warnings
 import numpy as np
 import scipy.optimize
 
-from ..data.trajectory import as_trajectories
-from ..errors import DataError, ParameterError, ShapeError
-from ..hybrid.inputs import check_hold, stage_inputs
+from ...data.trajectory import as_trajectories
+from ...errors import DataError, ParameterError, ShapeError
+from ...hybrid.inputs import check_hold, stage_inputs
 
 #: relative ridge on the scaled coefficients while supports are compared
 RIDGE = 1e-6

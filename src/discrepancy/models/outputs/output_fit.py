@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..constraints import Integral, Interval, Real, check_argument
-from ..errors import ParameterError, ShapeError
-from ..hybrid.outputs import OutputMap
-from ..optimizers.selection import one_standard_error
+from ...constraints import Integral, Interval, Real, check_argument
+from ...errors import ParameterError, ShapeError
+from ...hybrid.outputs import OutputMap
+from ...optimizers.selection import one_standard_error
 from .output_error import (
     NEGLIGIBLE,
     RIDGE,
@@ -227,9 +227,9 @@ def refit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, c
 def sandwich_uncertainty(model, covariance, dof: int, *, draws: int = 1000, seed: int = 0):
     """The coefficients' uncertainty as draws from a multivariate Student t around ``coef_``
     with scale ``covariance`` and ``dof`` degrees of freedom (blocks minus one), as a
-    :class:`~discrepancy.models.uncertainty.CoefficientUncertainty`, so ``print``,
+    :class:`~discrepancy.models.core.uncertainty.CoefficientUncertainty`, so ``print``,
     ``predict_interval`` and ``simulate_interval`` take it as they take a bootstrap."""
-    from .uncertainty import CoefficientUncertainty
+    from ..core.uncertainty import CoefficientUncertainty
 
     n, p = model.coef_.shape
     rng = np.random.default_rng(seed)

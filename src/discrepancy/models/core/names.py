@@ -16,7 +16,7 @@ from __future__ import annotations
 import re
 import warnings
 
-from ..errors import NameConventionWarning, UnknownNameError
+from ...errors import NameConventionWarning, UnknownNameError
 
 IDENTIFIERS = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
 

@@ -13,9 +13,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._optional import missing
-from ..errors import ExportError
-from ..hybrid.casadi_form import chained_step, hybrid_function, rk4_step, rk4_substep, stage_columns
+from ..._optional import missing
+from ...errors import ExportError
+from ...hybrid.casadi_form import (
+    chained_step,
+    hybrid_function,
+    rk4_step,
+    rk4_substep,
+    stage_columns,
+)
 
 #: steps per compiled call (building CasADi's map costs time in proportion to its length,
 #: so one map of this length is built once and called block after block); with many

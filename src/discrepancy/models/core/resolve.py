@@ -5,15 +5,15 @@ from __future__ import annotations
 
 import copy
 
-from ..differentiation import get_differentiation_method
-from ..differentiation.resolution import warn_if_coarse
-from ..errors import ParameterError
-from ..fitting.discrete import NextSample
-from ..fitting.prior import Prior
-from ..fitting.setup import FOLD_PROBE_ROWS, FitSetup, resolve_names
-from ..libraries import PolynomialLibrary
-from ..libraries.spec import parse_library
-from ..optimizers import PriorOnly, get_optimizer
+from ...differentiation import get_differentiation_method
+from ...differentiation.resolution import warn_if_coarse
+from ...errors import ParameterError
+from ...fitting.discrete import NextSample
+from ...fitting.prior import Prior
+from ...fitting.setup import FOLD_PROBE_ROWS, FitSetup, resolve_names
+from ...libraries import PolynomialLibrary
+from ...libraries.spec import parse_library
+from ...optimizers import PriorOnly, get_optimizer
 from .names import check_default_names, referenced_names
 
 

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError, UnknownNameError, describe
-from ..optimizers.linear_constraints import LinearConstraints
+from ...errors import ParameterError, UnknownNameError, describe
+from ...optimizers.linear_constraints import LinearConstraints
 
 Linear = tuple[Mapping[tuple[str, str], float], float]
 

@@ -14,11 +14,11 @@ import warnings
 
 import numpy as np
 
-from ..data.trajectory import as_trajectories
-from ..errors import ConvergenceError, ParameterError, SelectionWarning
-from ..hybrid.outputs import OutputMap
+from ...data.trajectory import as_trajectories
+from ...errors import ConvergenceError, ParameterError, SelectionWarning
+from ...hybrid.outputs import OutputMap
+from ..simulate.region import FittedRegion
 from .output_fit import refit_outputs
-from .region import FittedRegion
 
 #: the share of every record held out to judge a refit
 HOLDOUT = 0.25

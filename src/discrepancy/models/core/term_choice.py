@@ -13,8 +13,8 @@ import warnings
 
 import numpy as np
 
-from ..errors import DataError, PriorOnlyWarning
-from ..selection.choice import select_by_forecasts
+from ...errors import DataError, PriorOnlyWarning
+from ...selection.choice import select_by_forecasts
 
 SELECTIONS = ("auto", "forecast", "optimizer")
 

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .._optional import require
-from ..constraints import Integral, Interval, Options, check_argument, validate_params
-from ..errors import ExportError
-from ..symbolic import feature_name, symbol
-from ..symbolic import to_casadi as expression_to_casadi
-from .uncertainty import check_uncertainty
+from ..._optional import require
+from ...constraints import Integral, Interval, Options, check_argument, validate_params
+from ...errors import ExportError
+from ...symbolic import feature_name, symbol
+from ...symbolic import to_casadi as expression_to_casadi
+from ..core.uncertainty import check_uncertainty
 
 
 def exported_part(model, part, *, default_hybrid: bool = False):

@@ -1,7 +1,7 @@
 """Argument conventions shared by the model's methods."""
 from __future__ import annotations
 
-from ..errors import ParameterError
+from ...errors import ParameterError
 
 #: the data arguments scikit-learn passes on to each fold when metadata routing is enabled
 ROUTED = {"fit": ("t", "u", "x_dot", "sample_weight"), "score": ("t", "u", "x_dot")}

@@ -13,7 +13,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..hybrid.casadi_form import _casadi, library_columns, prior_expression, rk4_step, stage_columns
+from ...hybrid.casadi_form import (
+    _casadi,
+    library_columns,
+    prior_expression,
+    rk4_step,
+    stage_columns,
+)
 
 #: steps per differentiated block
 BLOCK = 256

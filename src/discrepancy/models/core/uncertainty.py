@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..constraints import (
+from ...constraints import (
     InstanceOf,
     Integral,
     Interval,
@@ -35,11 +35,11 @@ from ..constraints import (
     check_argument,
     validate_params,
 )
-from ..errors import ConvergenceError, ParameterError
-from ..optimizers import GramStatistics
-from ..optimizers.resampling import from_blocks
-from ..resources import check_memory, n_bytes
-from ..selection.candidates import FoldFits
+from ...errors import ConvergenceError, ParameterError
+from ...optimizers import GramStatistics
+from ...optimizers.resampling import from_blocks
+from ...resources import check_memory, n_bytes
+from ...selection.candidates import FoldFits
 from .checks import model_data
 
 BOOTSTRAP_CONSTRAINTS = {

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import DataError, MissingDependencyError, ParameterError, ShapeError, describe
-from ..fitting.accumulate import not_finite
-from ..resources import check_memory, n_bytes
+from ...errors import DataError, MissingDependencyError, ParameterError, ShapeError, describe
+from ...fitting.accumulate import not_finite
+from ...resources import check_memory, n_bytes
 from .checks import model_data
 
 METRICS = ("r2", "rmse", "trajectory")

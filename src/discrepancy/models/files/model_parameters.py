@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import math
 
-from ..errors import DiscrepancyError, ParameterError
-from .term_constraints import Constraints
+from ...errors import DiscrepancyError, ParameterError
+from ..core.term_constraints import Constraints
 
 #: the tags of a stored component parameter
 COMPONENT_TAGS = ("none", "text", "spec", "fitted")
@@ -66,10 +66,10 @@ def _decode_component(registry_name):
 
 def _registry(name):
     if name == "optimizer":
-        from ..optimizers.base import OPTIMIZERS
+        from ...optimizers.base import OPTIMIZERS
         return OPTIMIZERS
     if name == "differentiation_method":
-        from ..differentiation.base import METHODS
+        from ...differentiation.base import METHODS
         return METHODS
     return None
 
@@ -187,10 +187,10 @@ def check_parameters(cls, given: dict, fail) -> None:
     class's declared constraints before anything is built from them; a value they refuse,
     or a spec that does not parse, raises ``fail(why)`` (a ModelFileError: the file was
     edited)."""
-    from ..differentiation.base import METHODS
-    from ..libraries.spec import parse_library
-    from ..optimizers.base import OPTIMIZERS
-    from ..symbolic import IDENTIFIER
+    from ...differentiation.base import METHODS
+    from ...libraries.spec import parse_library
+    from ...optimizers.base import OPTIMIZERS
+    from ...symbolic import IDENTIFIER
 
     model = cls(**{k: v for k, v in given.items() if v is not FITTED})
     try:

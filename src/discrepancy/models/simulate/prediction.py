@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..constraints import Integral, Interval, check_argument
-from ..data.trajectory import as_2d, as_times
-from ..errors import ShapeError
-from ..hybrid.inputs import stage_inputs
-from ..runge_kutta import runge_kutta_step
+from ...constraints import Integral, Interval, check_argument
+from ...data.trajectory import as_2d, as_times
+from ...errors import ShapeError
+from ...hybrid.inputs import stage_inputs
+from ...runge_kutta import runge_kutta_step
 
 
 def predict_ahead(rhs, x, t, u, *, n_inputs: int, steps: int, u_hold: str,

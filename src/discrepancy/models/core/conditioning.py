@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 
-from ..errors import IllConditionedWarning
+from ...errors import IllConditionedWarning
 
 #: condition number of the scaled Gram matrix above which coefficients are not determined
 #: to 1e-6 relative (the normal equations lose about log10(condition) digits of 16)

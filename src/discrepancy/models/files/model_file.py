@@ -19,23 +19,23 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from .._version import __version__
-from ..data.containers import as_path
-from ..differentiation.base import METHODS
-from ..errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
-from ..libraries import CustomLibrary
-from ..optimizers.base import OPTIMIZERS
-from ..resources import check_features
-from ..symbolic import IDENTIFIER, from_data, to_data
+from ..._version import __version__
+from ...data.containers import as_path
+from ...differentiation.base import METHODS
+from ...errors import DiscrepancyError, MissingFileError, ModelFileError, ParameterError
+from ...libraries import CustomLibrary
+from ...optimizers.base import OPTIMIZERS
+from ...resources import check_features
+from ...symbolic import IDENTIFIER, from_data, to_data
+from ..simulate.region import FittedRegion
 from .model_parameters import decode_parameters, encode_parameters
-from .region import FittedRegion
 
 _NON_REAL = (sp.zoo, sp.oo, -sp.oo, sp.nan, sp.I)
 FORMAT = "discrepancy-model"
 VERSION = 4
 #: keys of each version (version 1 files, written before components were stored, version 2
 #: files, before the fitted region and the forecast choice were, and version 3 files, before
-#: every constructor parameter was (:mod:`discrepancy.models.model_parameters`), still load)
+#: every constructor parameter was (:mod:`discrepancy.models.files.model_parameters`), still load)
 KEYS = {1: {"format", "version", "written_by", "state_names", "input_names", "features",
             "coefficients", "prior", "user_functions", "metadata"}}
 KEYS[2] = KEYS[1] | {"optimizer", "differentiation_method", "fit"}

@@ -16,11 +16,11 @@ from collections.abc import Callable
 import numpy as np
 import scipy.integrate
 
-from ..constraints import Integral, Interval, Options, Real, check_argument
-from ..data.trajectory import as_times
-from ..errors import ParameterError, ShapeError, SimulationError, describe
-from ..hybrid.inputs import input_law, stage_inputs
-from ..runge_kutta import runge_kutta_step
+from ...constraints import Integral, Interval, Options, Real, check_argument
+from ...data.trajectory import as_times
+from ...errors import ParameterError, ShapeError, SimulationError, describe
+from ...hybrid.inputs import input_law, stage_inputs
+from ...runge_kutta import runge_kutta_step
 
 ADAPTIVE = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 METHODS = (*ADAPTIVE, "odeint", "rk4")
@@ -86,8 +86,8 @@ def integrate(rhs: Callable, x0, t, u=None, *, n_states: int, n_inputs: int,
         max_evaluations: right-hand-side evaluations allowed (default ``500`` per output
             sample, at least 1e5).
         compiled: for ``"rk4"``, ``compiled(x0, stages, h) -> (k - 1, n)``, a compiled map of
-            the same steps (see :mod:`discrepancy.models.fast_simulation`); ``None`` steps in
-            Python.
+            the same steps (see :mod:`discrepancy.models.simulate.fast_simulation`); ``None``
+            steps in Python.
 
     Raises:
         SimulationError: (a ``ConvergenceError``) when the solution stops early: a

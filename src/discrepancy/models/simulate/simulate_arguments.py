@@ -1,5 +1,5 @@
 """PySINDy's ways of choosing a simulation's integrator, mapped onto the options of
-:func:`~discrepancy.models.simulation.integrate`.
+:func:`~discrepancy.models.simulate.simulation.integrate`.
 
 PySINDy's ``simulate(x0, t, u, integrator="solve_ivp", integrator_kws={...},
 interpolator=..., interpolator_kws={...})`` passes ``integrator_kws`` to scipy's
@@ -10,7 +10,7 @@ The same calls mean the same solver and tolerances here; our own flat keywords
 """
 from __future__ import annotations
 
-from ..errors import ParameterError, describe
+from ...errors import ParameterError, describe
 
 INTEGRATORS = ("solve_ivp", "odeint")
 #: PySINDy's default integrator_kws
@@ -82,7 +82,7 @@ def map_options(stop_condition, pysindy: dict, options: dict):
 
 
 def simulation_options(u, t, stop_condition, pysindy: dict, options: dict):
-    """``(u, options)`` for :func:`~discrepancy.models.simulation.integrate` from PySINDy's
+    """``(u, options)`` for :func:`~discrepancy.models.simulate.simulation.integrate` from PySINDy's
     keywords and ours, checked before any work that depends on them."""
     from .simulation import check_options
 

@@ -1,11 +1,11 @@
 """The model's output-error methods: fitting, refining and starting from measured outputs
-when some states are not measured (see :mod:`discrepancy.models.output_error`)."""
+when some states are not measured (see :mod:`discrepancy.models.outputs.output_error`)."""
 from __future__ import annotations
 
 import numpy as np
 
-from ..optimizers import PriorOnly, get_optimizer
-from .arguments import keywords_only
+from ...optimizers import PriorOnly, get_optimizer
+from ..core.arguments import keywords_only
 
 _COMMON = """
             y: recorded outputs ``(m, k)`` (1-D for one), or a list per trajectory.
@@ -84,7 +84,7 @@ class OutputErrorMethods:
         repeated on the first 75 % of every record and both models forecast the rest;
         when the refit forecasts worse, the coefficients are kept (only the initial states
         are estimated) with a ``SelectionWarning``. ``refine_check_`` holds both held-out
-        errors and the outcome (:func:`discrepancy.models.output_checks.check_refine`).
+        errors and the outcome (:func:`discrepancy.models.outputs.output_checks.check_refine`).
 
         Args:{common}
         """
@@ -129,7 +129,7 @@ class OutputErrorMethods:
     def _refuse_maps(self, method: str) -> None:
         """Output error integrates an ODE: a discrete-time model is refused by name."""
         if self.discrete_time is True:
-            from ..errors import ParameterError
+            from ...errors import ParameterError
             raise ParameterError(f"{method} simulates continuous-time models (an ODE with "
                                  "RK4 between samples); this model is discrete_time=True. For "
                                  "a map, fit the successors (fit(x, u=u)) or filter with "
@@ -139,7 +139,7 @@ class OutputErrorMethods:
         """The prior alone by output error: only the initial states are estimated."""
         import copy
 
-        from ..data.trajectory import as_trajectories
+        from ...data.trajectory import as_trajectories
         from .output_checks import state_count
         from .output_fit import refit_outputs
 
@@ -162,7 +162,7 @@ class OutputErrorMethods:
         """The region along the fitted simulation; a prior-only outcome flagged."""
         import warnings
 
-        from ..errors import PriorOnlyWarning
+        from ...errors import PriorOnlyWarning
         from .output_checks import simulated_region
 
         self.forecast_selection_, self.region_ = None, None
