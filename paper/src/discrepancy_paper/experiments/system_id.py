@@ -85,7 +85,8 @@ def blind_text(rep, choice, test_error: float, unit: str, cpu_seconds: float,
     rep.text(f"**Test RMS error: {test_error:.3f} {unit}**, {choice.model.complexity} "
              f"discrepancy terms, chosen candidate: **{choice.chosen}**; "
              f"{cpu_seconds:.0f} CPU seconds.")
-    rep.table(["candidate", "terms", "forecast error (scaled MSE)", "± s.e.", ""],
+    rep.table(["candidate", "terms (fitted on the largest part)", "forecast error (scaled MSE)",
+               "± s.e.", ""],
               [[name, row["n_terms"], f"{row['mean']:.4g}", f"{row['se']:.2g}",
                 "chosen" if name == choice.chosen else ""]
                for name, row in choice.scores.items()])
