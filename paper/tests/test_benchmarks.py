@@ -23,6 +23,7 @@ def test_cascaded_tanks_beats_the_bar_with_few_terms(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)   # the blind procedure's ~400 CPU seconds come before the tuned fit
 def test_silverbox_arrow_within_a_millivolt_simulated_fast(tmp_path):
     folder = get_experiment("silverbox")(tmp_path)
     results = json.loads((folder / "results.json").read_text())
