@@ -73,7 +73,7 @@ streamed, peak_all = streamed_fit(files)
 streamed.print(precision=3)
 print(f"peak memory of the streamed fit: {peak_one / 2**20:.1f} MiB for one file, "
       f"{peak_all / 2**20:.1f} MiB for all four ({data_bytes / 2**20:.1f} MiB of data)")
-assert peak_all < 1.25 * peak_one and peak_all < data_bytes / 2
+assert peak_all < 1.25 * peak_one and peak_all < data_bytes   # 4x the data, ~the same peak
 
 fig, ax = plt.subplots(figsize=(6, 2.8))
 labels = ["data on disk\n(4 files)", "streamed fit,\n1 file", "streamed fit,\n4 files"]

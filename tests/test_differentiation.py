@@ -257,3 +257,17 @@ def test_coarse_sampling_is_warned_about_for_the_method_that_suffers():
         with warnings.catch_warnings():
             warnings.simplefilter("error", CoarseSamplingWarning)
             dc.DiscrepancyModel(differentiation_method=method).fit(x, t=t)
+
+
+@pytest.mark.parametrize("window, polyorder", [(9, 3), (31, 5), (101, 5), (201, 7)])
+@pytest.mark.parametrize("deriv", [0, 1])
+def test_savgol_of_columns_equals_savgol_of_each_column(window, polyorder, deriv):
+    """The 2-D path (one set of weights for every column, as the PDE time derivative uses
+    for every grid point) gives the 1-D filter's numbers column by column."""
+    from discrepancy.differentiation.savgol import savgol
+
+    x = np.random.default_rng(0).normal(size=(500, 7)).cumsum(axis=0)
+    together = savgol(x, window, polyorder, deriv=deriv, delta=0.01)
+    alone = np.column_stack([savgol(x[:, j], window, polyorder, deriv=deriv, delta=0.01)
+                             for j in range(x.shape[1])])
+    np.testing.assert_allclose(together, alone, rtol=0, atol=1e-13 * np.abs(alone).max())

@@ -64,7 +64,7 @@ def test_bad_solver_settings_are_named():
         MPC(f, dt=0.1, solver="snopt")
     with pytest.raises(ParameterError, match="qp_solver must be a CasADi QP solver"):
         MPC(f, dt=0.1, solver="rti", qp_solver="nonesuch")
-    with pytest.raises(ParameterError, match="max_iter must be a positive integer"):
+    with pytest.raises(ParameterError, match="max_iter must be None or an integer >= 1"):
         MPC(f, dt=0.1, solver="rti", max_iter=0)
     with pytest.raises(ParameterError, match="compile must be True or False"):
         MPC(f, dt=0.1, solver="rti", compile="yes")

@@ -225,6 +225,22 @@ def canonical_anchors(app, doctree) -> None:
             taken.add(canonical)
 
 
+def backlinks_to_defining_path(app):
+    """Make viewcode's source pages link back to ``page.html#<defining path>``.
+
+    viewcode keeps one anchor prefix per source module: the module under which the first of
+    its objects happened to be read (``discrepancy`` for ``discrepancy.Grid``), and links
+    every object of that source file to ``page.html#<prefix>.<name>``. The objects of one
+    file may have different homes (``discrepancy.data.fields.FieldRun`` beside
+    ``discrepancy.Grid``), so that anchor would not exist on their pages; the defining module
+    is right for all of them (``canonical_anchors`` gives every signature that anchor)."""
+    modules = getattr(app.env, "_viewcode_modules", {})
+    for module_name, entry in modules.items():
+        if entry:                       # (code, tags, used names, anchor prefix)
+            modules[module_name] = (*entry[:3], module_name)
+    return []
+
+
 FIELD_WITH_NAMES = re.compile(r"^(\s*:(?:param|ivar|var|cvar|keyword|type|vartype) )"
                               r"([A-Za-z_][\w]*(?:, [A-Za-z_][\w]*)+):")
 
@@ -255,6 +271,7 @@ def setup(app):
     app.connect("builder-inited", write_pages)
     app.connect("missing-reference", resolve_any_path)
     app.connect("doctree-read", canonical_anchors)
+    app.connect("html-collect-pages", backlinks_to_defining_path, priority=400)  # before viewcode
     app.connect("warn-missing-reference", foreign_reference)
     app.connect("autodoc-process-docstring", join_field_names, priority=600)  # after napoleon
     return {"parallel_read_safe": True, "parallel_write_safe": True}

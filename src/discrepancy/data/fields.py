@@ -144,7 +144,7 @@ class FieldRun:
 
     @property
     def n_fields(self) -> int:
-        """Number of fields ``n`` (the last axis of :attr:`u`)."""
+        """Number of fields ``n`` (the last axis of ``u``)."""
         return self.u.shape[-1]
 
 

@@ -74,9 +74,11 @@ class SavitzkyGolay(Differentiator):
     def _compute(self, x, t):
         dt = (t[-1] - t[0]) / (len(t) - 1)
         smooth, x_dot = np.empty_like(x), np.empty_like(x)
-        for j, w in enumerate(self._windows(x.shape[1])):
-            x_dot[:, j] = savgol(x[:, j], w, self.polyorder, deriv=1, delta=dt)
-            smooth[:, j] = savgol(x[:, j], w, self.polyorder) if self.smooth else x[:, j]
+        windows = np.asarray(self._windows(x.shape[1]))
+        for w in np.unique(windows):           # columns sharing a window: one call
+            j = np.flatnonzero(windows == w)
+            x_dot[:, j] = savgol(x[:, j], int(w), self.polyorder, deriv=1, delta=dt)
+            smooth[:, j] = savgol(x[:, j], int(w), self.polyorder) if self.smooth else x[:, j]
         return smooth, x_dot
 
 

@@ -39,21 +39,26 @@ def _edge(values: np.ndarray, polyorder: int, deriv: int, delta: float) -> np.nd
     """The ``deriv``-th derivative, at every sample of ``values`` (one window), of the
     polynomial fitted to them."""
     design, h = _design(len(values), polyorder)
-    coef = np.linalg.lstsq(design, values, rcond=None)[0]
-    derived = np.polynomial.polynomial.polyder(coef, deriv) / (h * delta) ** deriv
+    coef = np.linalg.lstsq(design, values, rcond=None)[0]       # (degree + 1[, k])
+    derived = np.polynomial.polynomial.polyder(coef, deriv, axis=0) / (h * delta) ** deriv
     return design[:, :len(derived)] @ derived
 
 
 def savgol(x: np.ndarray, window: int, polyorder: int, *, deriv: int = 0,
            delta: float = 1.0) -> np.ndarray:
-    """Savitzky–Golay filter of one series ``x`` ``(m,)`` (``m >= window``)."""
+    """Savitzky–Golay filter of one series ``x`` ``(m,)``, or of every column of ``(m, k)``
+    along axis 0 with one set of weights (``m >= window``)."""
     from scipy.signal import oaconvolve
 
     x = np.ascontiguousarray(x, dtype=float)
     h, m = window // 2, len(x)
     c = savgol_coefficients(window, polyorder, deriv=deriv, delta=delta)
-    out = np.empty(m)
-    if window <= DIRECT_WINDOW:
+    out = np.empty(x.shape)
+    if x.ndim == 2 and window <= DIRECT_WINDOW:
+        out[h:m - h] = np.lib.stride_tricks.sliding_window_view(x, window, axis=0) @ c
+    elif x.ndim == 2:
+        out[h:m - h] = oaconvolve(x, c[::-1, None], mode="valid", axes=0)
+    elif window <= DIRECT_WINDOW:
         out[h:m - h] = np.correlate(x, c, mode="valid")
     else:
         out[h:m - h] = oaconvolve(x, c[::-1], mode="valid")

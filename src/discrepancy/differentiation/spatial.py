@@ -124,7 +124,7 @@ class _Stencil(SpatialDifferentiator):
 
 
 def apply_stencil(u, axis, weights, a, left, right, periodic):
-    """Apply a stencil along ``axis`` (see :meth:`_Stencil.stencil`); periodic axes wrap."""
+    """Apply a stencil along ``axis`` (see ``_Stencil.stencil``); periodic axes wrap."""
     u = np.moveaxis(u, axis, 0)
     n, b = u.shape[0], len(weights) - 1 - a
     if periodic:

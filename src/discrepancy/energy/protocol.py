@@ -78,7 +78,7 @@ class BlindFit:
     def soundness(self) -> dict:
         """The chosen law checked on the training part: per joint, its largest torque over
         the limit and over the holding torque at the turning points, and the constraints
-        active in its fit (:attr:`DissipationDiscrepancy.soundness_`)."""
+        active in its fit (``soundness_`` of :class:`~discrepancy.DissipationDiscrepancy`)."""
         return self.model.soundness_
 
     def restricted(self, names) -> BlindFit:
@@ -209,7 +209,8 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
     from an origin uses the states of the samples before it, less the smoother's edge (with
     a global smoother such as ``Dequantised`` those states are smoothed with the whole
     training part, never with validation). Only procedures whose law is sound on the
-    training part (:attr:`DissipationDiscrepancy.soundness_`) can be chosen.
+    training part (``soundness_`` of :class:`~discrepancy.DissipationDiscrepancy`) can be
+    chosen.
     """
     q = as_2d("q", q, allow_1d=True)
     t = as_times("t", t, len(q))

@@ -185,9 +185,9 @@ def kinetic_is_quadratic(energy, x: np.ndarray) -> bool:
 
 
 def holding_torques(energy, x: np.ndarray, direction: np.ndarray) -> np.ndarray:
-    """``|lambda|`` ``(m,)`` (N m): the torque a joint of speed ``direction . dq`` must exert
-    to stay at rest at states ``x`` ``(m, 2k)`` while the other joints move freely under the
-    conservative model ``energy`` (see the module's docstring)."""
+    """``|lambda|`` ``(m,)`` (N m): the torque a joint of speed ``(direction * dq).sum(-1)``
+    must exert to stay at rest at states ``x`` ``(m, 2k)`` while the other joints move freely
+    under the conservative model ``energy`` (see the module's docstring)."""
     k = x.shape[1] // 2
     q, v = x[:, :k], x[:, k:]
     h = 1e-6 * max(1.0, float(np.max(np.abs(q))))

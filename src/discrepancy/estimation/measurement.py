@@ -14,8 +14,11 @@ class Measurement:
     """``h(x)`` of ``outputs`` for states named ``state_names``.
 
     Attributes:
-        k: number of outputs; names: a readable name per output; selected: the state index
-        of each output when every output is a state, else ``None``.
+        k: number of outputs.
+        n: number of states.
+        names: a readable name per output.
+        selected: the state index of each output when every output is a state, else
+            ``None``.
     """
 
     def __init__(self, outputs, state_names):

@@ -35,10 +35,13 @@ class PredictionErrorProblem:
     """The pieces of one fit: records, noise layout, scales, and one likelihood per support.
 
     Args:
-        setup: the model's set-up; measurement: what ``y`` measures; equations: the
-        disturbed equations; records: :class:`FilterRecord` s (built with ``spec``);
+        setup: the model's set-up.
+        measurement: what ``y`` measures.
+        equations: the disturbed equations.
+        records: :class:`FilterRecord` objects (built with ``spec``).
         spec: the settings records and likelihoods share (``dynamics``, ``measurement``,
-        ``substeps``, ``u_hold``, ``R``); q_free, r_free: which noise levels are fitted;
+            ``substeps``, ``u_hold``, ``R``).
+        q_free, r_free: which noise levels are fitted.
         q0, r0: their values (starting or fixed).
     """
 
@@ -240,7 +243,7 @@ def measurement_noise_guess(records) -> np.ndarray:
 
 def check_records(records):
     """Raise :class:`~discrepancy.errors.DataError` when a record is shorter than
-    ``4 * BURN_IN`` samples (the first :data:`BURN_IN` only let the filter settle)."""
+    ``4 * BURN_IN`` samples (the first ``BURN_IN`` only let the filter settle)."""
     for rec in records:
         if rec.m < 4 * BURN_IN:
             from ..errors import DataError

@@ -18,9 +18,10 @@ class PredictionErrorMethods:
         hybrid model runs inside an extended Kalman filter, and its coefficients, the
         process noise and the measurement noise minimise the negative log-likelihood of the
         filter's one-step innovations (exact gradients through the filter by CasADi,
-        ``[control]``). Unlike output error (:meth:`fit_outputs`), the state is corrected at
-        every sample, so process noise, unmeasured disturbances and unstable or chaotic
-        dynamics do not bend the fit.
+        ``[control]``). Unlike output error
+        (:meth:`~discrepancy.DiscrepancyModel.fit_outputs`), the state is corrected at every
+        sample, so process noise, unmeasured disturbances and unstable or chaotic dynamics
+        do not bend the fit.
 
         Args:
             y: recorded outputs ``(m, k)`` (NaN where an output was not measured), or a
@@ -40,7 +41,7 @@ class PredictionErrorMethods:
                 default measured states at their first sample and the others at 0, with a
                 broad uncertainty (the first samples do not count in the fit).
             u_hold, substeps: the input between samples and RK4 steps per interval, as in
-                :meth:`fit_outputs`.
+                :meth:`~discrepancy.DiscrepancyModel.fit_outputs`.
             max_terms, holdout, tolerance: with the optimizer's ``threshold="auto"`` (the
                 default) supports from the whole allowed library down to none are fitted on
                 the first part of every record and scored by the innovations' likelihood on

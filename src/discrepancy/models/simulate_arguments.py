@@ -1,4 +1,5 @@
-"""PySINDy's ways of choosing a simulation's integrator, mapped onto :func:`integrate`'s.
+"""PySINDy's ways of choosing a simulation's integrator, mapped onto the options of
+:func:`~discrepancy.models.simulation.integrate`.
 
 PySINDy's ``simulate(x0, t, u, integrator="solve_ivp", integrator_kws={...},
 interpolator=..., interpolator_kws={...})`` passes ``integrator_kws`` to scipy's
@@ -81,8 +82,8 @@ def map_options(stop_condition, pysindy: dict, options: dict):
 
 
 def simulation_options(u, t, stop_condition, pysindy: dict, options: dict):
-    """``(u, options)`` for :func:`integrate` from PySINDy's keywords and ours, checked
-    before any work that depends on them."""
+    """``(u, options)`` for :func:`~discrepancy.models.simulation.integrate` from PySINDy's
+    keywords and ours, checked before any work that depends on them."""
     from .simulation import check_options
 
     if stop_condition is not None:

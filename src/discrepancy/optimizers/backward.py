@@ -8,13 +8,14 @@ removal raises the residual sum of squares least: ``ξ_j² / (G⁻¹)_jj`` for t
 solution of the current support (a scale-free criterion). The inverse is downdated by one
 rank-one step per removal and refreshed every :data:`REFRESH` steps, so the whole path of
 ``p`` supports costs about one ``p × p`` inversion. Candidates from both paths are then
-scored by the same cross-validation (:func:`~discrepancy.optimizers.selection.
-select_thresholds`, ``extra=``).
+scored by the same cross-validation
+(:func:`~discrepancy.optimizers.selection.select_thresholds`, ``extra=``).
 """
 from __future__ import annotations
 
 import numpy as np
 
+#: removals between recomputing the inverse from scratch (the rank-one downdates drift)
 REFRESH = 16
 
 

@@ -41,9 +41,10 @@ class ConstrainedSR3(Optimizer):
     """SR3 subject to ``constraint_lhs @ vec(Ξ) = constraint_rhs`` (or ``<=``).
 
     Args:
-        reg_weight_lam, regularizer, relax_coeff_nu, tol, max_iter, trimming_fraction,
-            trimming_step_size, initial_guess, normalize_columns: as :class:`SR3`.
-        constraint_lhs: ``(k, n_targets n_features)``; constraint_rhs: ``(k,)``.
+        reg_weight_lam, regularizer, relax_coeff_nu, tol, max_iter: as :class:`SR3`.
+        trimming_fraction, trimming_step_size, initial_guess, normalize_columns: as :class:`SR3`.
+        constraint_lhs: ``(k, n_targets n_features)``.
+        constraint_rhs: ``(k,)``.
         constraint_order: ``"target"`` or ``"feature"`` layout of ``constraint_lhs``.
         equality_constraints, inequality_constraints: which kind the rows are (neither:
             equalities, with a warning, as in PySINDy); with both, the first

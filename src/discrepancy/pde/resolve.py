@@ -25,7 +25,9 @@ from .weak import FieldWeakForm
 #: constant) and their derivatives, to the highest order (at most 4) that keeps it within
 #: DEFAULT_COLUMNS columns, and never below the prior's order or 2
 DEFAULT_DEGREE = 3
+#: highest derivative order of the default library
 DEFAULT_MAX_ORDER = 4
+#: most columns of the default library (its derivative order is lowered to stay within)
 DEFAULT_COLUMNS = 120
 
 

@@ -2,7 +2,7 @@
 
 The statistics are kept per *segment* of consecutive snapshots, each at least one time
 window long (a derivative stencil, or a test function's support). Segments are dealt to
-:data:`N_FOLDS` folds in turn; fold ``f`` is predicted by a support fitted on every segment
+``N_FOLDS`` folds in turn; fold ``f`` is predicted by a support fitted on every segment
 that is neither in ``f`` nor next to one of its segments. Rows of a segment and of its
 neighbours share samples (weak-form rows integrate ``2 H + 1`` of them), so without this
 purge a fold's noise is also in its training data and spurious terms look predictive
@@ -30,6 +30,7 @@ from ..optimizers.backward import backward_path
 from ..optimizers.selection import threshold_path
 
 N_FOLDS = 5
+#: fold errors below FLOOR times the mean square ``u_t`` count as numerical
 FLOOR = 1e-8
 
 

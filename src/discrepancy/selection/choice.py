@@ -4,7 +4,7 @@ default.
 1. The forecast windows kept with the statistics (:mod:`.held_out`) are prepared: origin
    states smoothed as the fit smoothed them, the raw samples after them as the truth.
 2. The prior alone forecasts from every origin; the horizon is where its error saturates
-   (:func:`~.forecast.choose_horizon`), so a chaotic or unstable system is judged on the
+   (:func:`~.horizon.choose_steps`), so a chaotic or unstable system is judged on the
    leads where forecasts still mean something.
 3. Candidates (:mod:`.candidates`) are refitted without the fold each origin lies in and
    forecast ``horizon`` samples from it; a candidate's score at a window is its mean scaled
@@ -160,8 +160,7 @@ def _halo(setup) -> int:
 def _local_steps(setup, origins) -> int:
     """Steps spanning the smoothing window (at least 8): the stretch the origin state is
     refined on."""
-    halo = getattr(setup.differentiation, "halo", None) or 0
-    return max(8, -(-(2 * halo + 1) // origins.stride))
+    return max(8, -(-(2 * _halo(setup) + 1) // origins.stride))
 
 
 class _Search:

@@ -41,6 +41,7 @@ BLOW_UP = 1e3
 #: a step of ``stride`` samples is taken when ``stride * dt * rate`` stays below this
 #: (``rate``: the data's fastest RMS rate of change over standard deviation)
 STEP_LIMIT = 0.2
+#: most samples per RK4 step (and the lag over which the rate is measured)
 MAX_STRIDE = 8
 #: relative size of the initial-state perturbations (of each state's scale)
 PERTURBATION = 1e-6

@@ -76,7 +76,7 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
         x: states ``(m, n)``, or outputs when ``outputs`` is given; or a list of records.
         t, u: as for ``fit``.
         candidates: ``{name: FeatureLibrary, library spec or unfitted DiscrepancyModel}``;
-            default :func:`~.candidate_libraries.default_libraries` of the data and prior.
+            default :func:`~discrepancy.selection.default_libraries` of the data and prior.
             The prior alone is always added (``"prior alone"``).
         outputs: what ``x`` measures (then every candidate is fitted by ``fit_outputs``).
         n_origins: forecast origins (at least 2), from half of every record on.

@@ -21,11 +21,18 @@ import numpy as np
 
 import discrepancy as dc
 
+from .prediction_error_settings import (  # noqa: F401 (the settings, read here by tests)
+    DT,
+    PROCESS_NOISE,
+    PUSH_EVERY,
+    PUSH_STD,
+    SENSOR_NOISE,
+    T_FULL,
+    T_QUICK,
+    TRUE,
+)
 from .report import Report
 
-TRUE = {"vel": -0.3, "pos^3": -0.5}
-DT, T_FULL, T_QUICK = 0.05, 300.0, 150.0
-PUSH_STD, PUSH_EVERY, PROCESS_NOISE, SENSOR_NOISE = 0.5, 15.0, 0.02, 0.01
 FIT = {"outputs": ["pos"], "u_hold": "zoh", "substeps": 2}
 SEEDS_FULL, SEEDS_QUICK = (1, 2, 3, 4, 5), (1, 2)
 
@@ -134,6 +141,7 @@ def run(out_dir, *, quick: bool = False):
     validation, curves = validation_errors({"prior alone": prior,
                                             "output error": main["output_error"][0],
                                             "prediction error": pem})
-    write(rep, main, seeds, (t, u, y, states, push, smoothed), validation, curves, quick)
+    write(rep, main, seeds, (t, u, y, states, push, smoothed), validation, curves, quick,
+          intro=__doc__)
     return rep.write()
 

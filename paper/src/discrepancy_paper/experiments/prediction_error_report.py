@@ -3,15 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .prediction_error import DT, PROCESS_NOISE, PUSH_EVERY, PUSH_STD, SENSOR_NOISE, TRUE
+from .prediction_error_settings import DT, PROCESS_NOISE, PUSH_EVERY, PUSH_STD, SENSOR_NOISE, TRUE
 
 ROUTES = {"output_error": "output error (fit_outputs)",
           "prediction_error": "prediction error (fit_prediction_error)"}
 
 
-def write(rep, main, seeds, data, validation, curves, quick):
-    from .prediction_error import __doc__ as intro
-
+def write(rep, main, seeds, data, validation, curves, quick, *, intro: str):
+    """The report and results of a run (``intro``: the experiment module's docstring)."""
     t, u, y, states, push, smoothed = data
     pem = main["prediction_error"][0]
     rep.text(intro.split("\n\n", 1)[1])
