@@ -7,7 +7,8 @@
   rolling-origin forecasts inside the training data, with :func:`default_libraries`;
 * :mod:`.held_out`, :mod:`.forecast`, :mod:`.candidates`: the windows kept beside the
   statistics, the batched forecasts and the candidates;
-* :mod:`.output_checks`: output-error fits judged by held-out forecasts (``refine``).
+* :mod:`.output_checks`: output-error fits judged by held-out forecasts (``refine``);
+  :mod:`.output_forecasts`: ``choose_procedure``'s output forecasts.
 """
 from .candidate_libraries import default_libraries
 from .choice import ForecastSelection

@@ -15,6 +15,9 @@ selection scores them (the initial state fitted to the window, each window until
 prior's sensitivity to its start saturates, :mod:`.forecast`).
 With outputs (``fit_outputs``), the fitted simulation continues past the origin and its
 outputs are scored to the end of each record (as the benchmarks score a model).
+
+Cost of output fits: each candidate's output-error path runs once, before the first
+origin (:mod:`.output_forecasts`).
 """
 from __future__ import annotations
 
@@ -91,15 +94,17 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     if not isinstance(n_origins, (int, np.integer)) or isinstance(n_origins, bool) or \
             n_origins < 2:
         raise ParameterError(f"n_origins must be an integer >= 2; got {n_origins!r}")
-    templates = _templates(model, candidates, records, outputs)
     fit_kws = dict(fit_kws or {})
+    templates = _templates(model, candidates, records, outputs, fit_kws)
     shortest = min(r.n_samples for r in records)
     share = HORIZON_SHARE if outputs is not None or horizon is None else horizon / shortest
     if not 0 < share < 1 - FIRST_ORIGIN:
         raise ParameterError(f"horizon must be a number of samples below "
                              f"{int(shortest * (1 - FIRST_ORIGIN))}; got {horizon!r}")
     fractions = np.linspace(FIRST_ORIGIN, 1 - share, n_origins)
-    judge = _OutputForecasts(records, outputs, fit_kws) if outputs is not None else \
+    from .output_forecasts import OutputForecasts
+
+    judge = OutputForecasts(records, outputs, fit_kws) if outputs is not None else \
         _StateForecasts(records, fit_kws, horizon)
     scores, fitted = {}, {}
     for name, template in tqdm(list(templates.items()), desc="procedures",
@@ -126,7 +131,7 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     return ProcedureChoice(pick, final, scores, fractions.tolist(), judge.horizon)
 
 
-def _templates(model, candidates, records, outputs) -> dict:
+def _templates(model, candidates, records, outputs, fit_kws) -> dict:
     from ..models import DiscrepancyModel
     from ..models.setup import resolve_names
     from .candidate_libraries import default_libraries
@@ -141,10 +146,9 @@ def _templates(model, candidates, records, outputs) -> dict:
         n = first.x.shape[1] if outputs is None else state_count(model)
         states = resolve_names("state_names", model.state_names, n, "x", one=None)
         inputs = resolve_names("input_names", model.input_names, r, "u", one="u")
-        x, measured = _variables_with_data(records, states, outputs)
+        x = _variables_with_data(model, records, states, outputs, fit_kws)
         u = None if first.u is None else np.vstack([rec.u for rec in records])
-        candidates = default_libraries(states, inputs, x, u, prior=model.prior,
-                                       measured=[*measured, *inputs])
+        candidates = default_libraries(states, inputs, x, u, prior=model.prior)
     if not isinstance(candidates, Mapping) or not candidates:
         raise ParameterError(f"candidates must be a non-empty mapping of names to libraries "
                              f"or unfitted DiscrepancyModels; got {describe(candidates)}")
@@ -164,21 +168,30 @@ def _clone(model):
     return type(model)(**model.get_params(deep=False))
 
 
-def _variables_with_data(records, states, outputs):
-    """States ``(m, n)`` (NaN where unmeasured) and the names of the measured ones."""
+def _variables_with_data(model, records, states, outputs, fit_kws):
+    """States ``(m, n)``: measured, or (output fits) the measured ones where an output is
+    a state and the others along the prior's simulation (:func:`.output_checks.prior_states`)."""
     if outputs is None:
-        return np.vstack([r.x for r in records]), list(states)
+        return np.vstack([r.x for r in records])
     from ..models.outputs import OutputMap
+    from .output_checks import prior_states
 
+    y = [r.x for r in records]
+    x = prior_states(model, y, [r.t for r in records],
+                     None if records[0].u is None else [r.u for r in records],
+                     outputs=outputs, **{**fit_kws, "x0": _per_record(fit_kws, records)})
     out_map = OutputMap(outputs, states)
-    y = np.vstack([r.x for r in records])
-    x = np.full((len(y), len(states)), np.nan)
-    measured = []
     if out_map.selected is not None:
         for k, i in enumerate(out_map.selected):
-            x[:, i] = y[:, k]
-            measured.append(states[i])
-    return x, measured
+            x[:, i] = np.concatenate([rec[:, k] for rec in y])
+    return x
+
+
+def _per_record(fit_kws, records):
+    x0 = fit_kws.get("x0")
+    if x0 is None or np.ndim(x0) != 1:
+        return x0
+    return [np.asarray(x0, float)] * len(records)
 
 
 class _Judge:
@@ -244,45 +257,6 @@ class _StateForecasts(_Judge):
         if not windows:
             raise DataError("the records are too short to forecast from the origins")
         return windows
-
-
-class _OutputForecasts(_Judge):
-    """Fit by output error on each record's first part; the fitted simulation continues to
-    the record's end, its outputs scored after the origin."""
-
-    def __init__(self, records, outputs, fit_kws):
-        super().__init__(records, fit_kws)
-        self.outputs = outputs
-
-    def _fit(self, model, y, t, u):
-        return model.fit_outputs(y, t=t, u=u, outputs=self.outputs, **self.fit_kws)
-
-    def score(self, template, fraction) -> float:
-        import warnings
-
-        from ..models.outputs import OutputMap
-        from .output_checks import simulate_quietly
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                self.last = model = self.fit(template, fraction)
-            except ConvergenceError:
-                self.last = None
-                return float("inf")
-        out_map = OutputMap(self.outputs, model.state_names_)
-        x0s = model.x0_ if isinstance(model.x0_, list) else [model.x0_]
-        squares = []
-        for x0, rec in zip(x0s, self.records, strict=True):
-            cut = int(round(rec.n_samples * fraction))
-            try:
-                sim = out_map(simulate_quietly(model, x0, rec, self.fit_kws.get("substeps", 4),
-                                        self.fit_kws.get("u_hold", "linear")))
-            except ConvergenceError:
-                return float("inf")
-            squares.append((((sim - rec.x) / self.scale)[cut:]) ** 2)
-        value = float(np.mean(np.vstack(squares)))
-        return value if np.isfinite(value) else float("inf")
 
 
 def _head(record, fraction):
