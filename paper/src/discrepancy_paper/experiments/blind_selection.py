@@ -9,7 +9,9 @@ Three simulated cases, every model fitted with the library's defaults (nothing t
 (c) a disturbance the training data do not contain: a forced Duffing oscillator whose
     prior lacks its cubic spring and damping; the library is chosen blind by
     ``choose_procedure`` on training records, and the chosen hybrid forecasts a test
-    record in which an unmeasured force kicks the oscillator beyond the training range.
+    record in which an unmeasured force kicks the oscillator beyond the training range;
+    repeated over ``DISTURBANCE_SEEDS`` (inputs' phases and noise), the chosen hybrid's
+    k-step errors on the disturbed record against the prior alone's.
 
 Noise: Gaussian of standard deviation 0.1 on every state (10x the paper's 0.01), sampling
 0.01, 25 time units per record, as the paper's Van der Pol data. For (a) and (b) the old
