@@ -116,9 +116,7 @@ def _blind(prior, y, t, u, full):
     cpu, wall = time.process_time(), time.perf_counter()
     template = dc.DiscrepancyModel(prior=prior, state_names=["y", "v"], input_names=["u"],
                                    constraints=dc.Constraints(exact_equations=["y"]))
-    states = np.column_stack([y, np.full(len(y), np.nan)])   # v is not measured
-    candidates = blind_candidates(template, ["u"], states, u[:, None],
-                                  measured=["y", "u"], full=full)
+    candidates = blind_candidates(template, y, t, u, outputs=["y"], full=full)
     choice = dc.choose_procedure(template, y, t=t, u=u, outputs=["y"], candidates=candidates)
     return {"choice": choice, "cpu_seconds": time.process_time() - cpu,
             "seconds": time.perf_counter() - wall}

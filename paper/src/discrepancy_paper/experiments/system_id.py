@@ -41,14 +41,19 @@ def support_path_figure(path):
 SMALL_CANDIDATES = "linear"
 
 
-def blind_candidates(model, inputs, states_data, u, *, measured, full: bool) -> dict:
+def blind_candidates(model, y, t, u, *, outputs, fit_kws=None, full: bool) -> dict:
     """The library's default candidates (:func:`discrepancy.selection.default_libraries`)
-    for ``model``'s prior; unless ``full``, only the linear terms alone or with one family
-    of nonlinear terms (a rule on the candidates' names, fixed before any data were seen)."""
+    for ``model``'s prior and the outputs ``y`` (one record; the states no output measures
+    along the prior's simulation, as ``choose_procedure`` places them); unless ``full``,
+    only the linear terms alone or with one family of nonlinear terms (a rule on the
+    candidates' names, fixed before any data were seen)."""
     from discrepancy.selection import default_libraries
+    from discrepancy.selection.output_checks import prior_states
 
-    libraries = default_libraries(model.state_names, inputs, states_data, u,
-                                  prior=model.prior, measured=measured)
+    states = prior_states(model, y, t, u, outputs=outputs, **(fit_kws or {}))
+    libraries = default_libraries(model.state_names, model.input_names, states,
+                                  None if u is None else np.reshape(u, (len(y), -1)),
+                                  prior=model.prior)
     return {name: lib for name, lib in libraries.items()
             if full or name.startswith(SMALL_CANDIDATES)}
 
