@@ -53,6 +53,17 @@ def test_the_prior_alone_fitted_on_purpose_estimates_only_initial_states():
     assert fitted.region_ is not None and fitted.region_.names == ("pos", "vel", "u")
 
 
+def test_prior_states_give_the_unmeasured_velocity_along_the_prior():
+    """An exact prior with the position measured: its simulation from the fitted initial
+    state recovers the velocity no output measures."""
+    from discrepancy.models.outputs.output_checks import prior_states
+
+    u, x, y = record(0.1, 0.0)
+    states = prior_states(model(), y, T, u, outputs=["pos"])
+    assert states.shape == x.shape
+    assert np.sqrt(np.mean((states[:, 1] - x[:, 1]) ** 2)) < 0.02 * np.std(x[:, 1])
+
+
 def true_model(u, x, coef_cubic=-0.5, coef_damping=-0.1):
     fitted = model(feature_library=dc.PolynomialLibrary(3, variables=["pos", "vel"]),
                    optimizer=dc.STLSQ(threshold=0.05)).fit(x, t=T, u=u)

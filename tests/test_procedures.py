@@ -81,6 +81,19 @@ def test_hinge_knots_are_quantiles_of_the_data():
     assert list(libs)[:3] == ["linear", "polynomial 2", "polynomial 3"]
 
 
+def test_roots_only_of_variables_that_keep_one_sign():
+    rng = np.random.default_rng(3)
+    x = np.c_[rng.uniform(0.5, 10, 500), rng.normal(size=500)]    # a level, a signed rate
+    libs = default_libraries(["h", "v"], [], x)
+    names = libs["linear + roots"].fit(["h", "v"]).get_feature_names()
+    assert any("sqrt" in n and "h" in n for n in names)
+    assert not any("sqrt" in n and "v" in n for n in names), names
+    signed = default_libraries(["v"], [], x[:, 1:])            # nothing keeps one sign
+    assert "linear + roots" not in signed
+    assert not any("sqrt" in n for n in signed["polynomial 2 + roots + hinges"].fit(["v"])
+                   .get_feature_names())
+
+
 def test_candidates_are_checked():
     with pytest.raises(dc.errors.ParameterError, match="candidates"):
         dc.choose_procedure(dc.DiscrepancyModel(prior=oscillator), np.ones((100, 2)),

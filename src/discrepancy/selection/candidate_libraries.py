@@ -13,8 +13,14 @@ exact sympy library (so a chosen model exports like any other):
 * hinges ``max(0, z - k)`` with knots ``k`` at the 25, 50 and 75 % quantiles of every
   state and input (overflows, dead zones, piecewise-linear springs), and saturations
   ``tanh((z - median) / spread)``;
-* square roots ``sign(z) sqrt(|z|)`` of every state and input (Torricelli outflow,
-  quadratic drag inverted).
+* square roots ``sign(z) sqrt(|z|)`` of every state and input that keeps one sign over
+  the data, or has none (Torricelli outflow of a level, quadratic drag inverted): the root
+  of a variable that crosses zero has an infinite slope there, which no physical law of
+  the kind needs and which makes output-error fits crawl.
+
+For output-error fits, states no output measures take their values along the prior's
+simulation (:func:`~discrepancy.models.outputs.output_checks.prior_states`), so their knots,
+scales and signs come from the data too.
 
 Each nonlinear family comes with the linear terms (``linear + friction`` etc.), so a
 candidate never lacks the simplest correction, and one candidate joins the degree-2
@@ -101,16 +107,17 @@ def root_library(names) -> CustomLibrary:
 def default_libraries(state_names, input_names, x: np.ndarray, u: np.ndarray | None = None,
                       *, prior=None, measured=None) -> dict:
     """The default candidate libraries (module doc) for data ``x`` ``(m, n)`` and ``u``
-    ``(m, r)``, in order of growing size. ``measured``: the variables with data (for
-    output-error fits, the measured states and the inputs); knots and scales come from
-    them, other states get polynomial and root terms only."""
+    ``(m, r)``, in order of growing size. ``measured``: the variables with data (default
+    all; a column with NaN has none); knots, scales and signs come from them, other
+    states get polynomial and root terms only."""
     names = [*state_names, *input_names]
     columns = x if u is None else np.hstack([x, u])
     if np.ndim(columns) != 2 or np.shape(columns)[1] != len(names):
         raise ShapeError(f"state_names and input_names name {len(names)} variables; x and u "
                          f"hold {np.shape(columns)[1:]} columns")
     measured = names if measured is None else list(measured)
-    data = {n: columns[:, names.index(n)] for n in measured if n in names}
+    data = {n: columns[:, names.index(n)] for n in measured if n in names
+            and np.all(np.isfinite(columns[:, names.index(n)]))}
     linear = PolynomialLibrary(1)
     out = {"linear": linear, "polynomial 2": PolynomialLibrary(2),
            "polynomial 3": PolynomialLibrary(3)}
@@ -121,8 +128,12 @@ def default_libraries(state_names, input_names, x: np.ndarray, u: np.ndarray | N
     hinges = hinge_library(data)
     if hinges is not None:
         out["linear + hinges"] = PolynomialLibrary(1) + hinges
-    out["linear + roots"] = PolynomialLibrary(1) + root_library(names)
+    signed = [n for n in names if n not in data or np.all(data[n] >= 0)
+              or np.all(data[n] <= 0)]
+    if signed:
+        out["linear + roots"] = PolynomialLibrary(1) + root_library(signed)
     if hinges is not None:
-        out["polynomial 2 + roots + hinges"] = PolynomialLibrary(2) + root_library(names) + \
-            hinge_library(data)
+        quadratic = PolynomialLibrary(2) + root_library(signed) if signed else \
+            PolynomialLibrary(2)
+        out["polynomial 2 + roots + hinges"] = quadratic + hinge_library(data)
     return out

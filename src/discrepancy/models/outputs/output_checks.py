@@ -14,6 +14,7 @@ import warnings
 
 import numpy as np
 
+from ...base import clone
 from ...data.trajectory import as_trajectories
 from ...errors import ConvergenceError, ParameterError, SelectionWarning
 from ...hybrid.outputs import OutputMap
@@ -54,6 +55,29 @@ def simulated_region(model, y, t, u, *, x0s, substeps: int, u_hold: str):
     if not np.all(np.isfinite(z)):
         return None
     return FittedRegion(tuple(model.variable_names_), z.min(axis=0), z.max(axis=0))
+
+
+def prior_states(model, y, t=None, u=None, *, outputs, **fit_kws) -> np.ndarray:
+    """The states ``(m, n)`` (every record's, stacked) along the simulation of ``model``'s
+    prior alone, its initial states fitted to the outputs ``y`` by output error: values
+    for the states no output measures (where default candidate libraries place knots and
+    scales, and see whether a state keeps one sign). ``fit_kws``: as for ``fit_outputs``
+    (``x0``, ``x0_bounds``, ``u_hold``, ``substeps``). NaN where the simulation diverges."""
+    prior = clone(model).set_params(optimizer="prior_only")
+    keys = ("x0", "x0_bounds", "u_hold", "substeps")
+    kw = {k: v for k, v in fit_kws.items() if k in keys}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        prior.fit_outputs(y, t=t, u=u, outputs=outputs, **kw)
+    x0s = prior.x0_ if isinstance(prior.x0_, list) else [prior.x0_]
+    parts = []
+    for x0, rec in zip(x0s, as_trajectories(y, t, u, x_name="y"), strict=True):
+        try:
+            parts.append(simulate_quietly(prior, x0, rec, kw.get("substeps", 4),
+                                          kw.get("u_hold", "linear")))
+        except ConvergenceError:
+            parts.append(np.full((rec.n_samples, len(x0)), np.nan))
+    return np.vstack(parts)
 
 
 def simulate_quietly(model, x0, record, substeps, u_hold):

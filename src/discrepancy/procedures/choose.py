@@ -15,36 +15,32 @@ selection scores them (the initial state fitted to the window, each window until
 prior's sensitivity to its start saturates, :mod:`discrepancy.selection.forecast`).
 With outputs (``fit_outputs``), the fitted simulation continues past the origin and its
 outputs are scored to the end of each record (as the benchmarks score a model).
+
+Cost of output fits: each candidate's output-error path runs once, before the first
+origin (:mod:`.output_forecasts`).
 """
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 from tqdm.auto import tqdm
 
-from .base import clone
-from .constraints import Integral, Interval, check_argument
-from .data.trajectory import Trajectory, as_trajectories
-from .errors import ConvergenceError, DataError, ParameterError, describe
-from .fitting.held_out import Window
-from .fitting.setup import resolve_names
-from .hybrid.outputs import OutputMap
-from .libraries import FeatureLibrary
-from .models import DiscrepancyModel
-from .models.outputs.output_checks import simulate_quietly, state_count
-from .optimizers.selection import one_standard_error
-from .selection.candidate_libraries import default_libraries
-from .selection.choice import TOLERANCE
-from .selection.forecast import forecast_scores, prepare
-from .selection.horizon import sensitive_leads
-
-#: where the first origin lies, as a share of each record
-FIRST_ORIGIN = 0.5
-#: the forecast length of output fits, and the most of a record a state forecast takes
-HORIZON_SHARE = 0.25
+from ..base import clone
+from ..constraints import Integral, Interval, check_argument
+from ..data.trajectory import as_trajectories
+from ..errors import ConvergenceError, ParameterError, describe
+from ..fitting.setup import resolve_names
+from ..hybrid.outputs import OutputMap
+from ..libraries import FeatureLibrary
+from ..models import DiscrepancyModel
+from ..models.outputs.output_checks import prior_states, state_count
+from ..optimizers.selection import one_standard_error
+from ..selection.candidate_libraries import default_libraries
+from ..selection.choice import TOLERANCE
+from .judges import FIRST_ORIGIN, HORIZON_SHARE, StateForecasts
+from .output_forecasts import OutputForecasts
 
 
 @dataclass
@@ -99,16 +95,16 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     """
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
     check_argument("n_origins", n_origins, Interval(Integral, 2))
-    templates = _templates(model, candidates, records, outputs)
     fit_kws = dict(fit_kws or {})
+    templates = _templates(model, candidates, records, outputs, fit_kws)
     shortest = min(r.n_samples for r in records)
     share = HORIZON_SHARE if outputs is not None or horizon is None else horizon / shortest
     if not 0 < share < 1 - FIRST_ORIGIN:
         raise ParameterError(f"horizon must be a number of samples below "
                              f"{int(shortest * (1 - FIRST_ORIGIN))}; got {horizon!r}")
     fractions = np.linspace(FIRST_ORIGIN, 1 - share, n_origins)
-    judge = _OutputForecasts(records, outputs, fit_kws) if outputs is not None else \
-        _StateForecasts(records, fit_kws, horizon)
+    judge = OutputForecasts(records, outputs, fit_kws) if outputs is not None else \
+        StateForecasts(records, fit_kws, horizon)
     scores, fitted = {}, {}
     for name, template in tqdm(list(templates.items()), desc="procedures",
                                disable=None if progress is None else not progress):
@@ -134,7 +130,7 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     return ProcedureChoice(pick, final, scores, fractions.tolist(), judge.horizon)
 
 
-def _templates(model, candidates, records, outputs) -> dict:
+def _templates(model, candidates, records, outputs, fit_kws) -> dict:
     if not isinstance(model, DiscrepancyModel) or hasattr(model, "coef_"):
         raise ParameterError(f"model must be an unfitted DiscrepancyModel; got "
                              f"{describe(model)}")
@@ -144,10 +140,9 @@ def _templates(model, candidates, records, outputs) -> dict:
         n = first.x.shape[1] if outputs is None else state_count(model)
         states = resolve_names("state_names", model.state_names, n, "x", one=None)
         inputs = resolve_names("input_names", model.input_names, r, "u", one="u")
-        x, measured = _variables_with_data(records, states, outputs)
+        x = _variables_with_data(model, records, states, outputs, fit_kws)
         u = None if first.u is None else np.vstack([rec.u for rec in records])
-        candidates = default_libraries(states, inputs, x, u, prior=model.prior,
-                                       measured=[*measured, *inputs])
+        candidates = default_libraries(states, inputs, x, u, prior=model.prior)
     if not isinstance(candidates, Mapping) or not candidates:
         raise ParameterError(f"candidates must be a non-empty mapping of names to libraries "
                              f"or unfitted DiscrepancyModels; got {describe(candidates)}")
@@ -163,113 +158,24 @@ def _templates(model, candidates, records, outputs) -> dict:
     return out
 
 
-def _variables_with_data(records, states, outputs):
-    """States ``(m, n)`` (NaN where unmeasured) and the names of the measured ones."""
+def _variables_with_data(model, records, states, outputs, fit_kws):
+    """States ``(m, n)``: measured, or (output fits) the measured ones where an output is
+    a state and the others along the prior's simulation (:func:`prior_states`)."""
     if outputs is None:
-        return np.vstack([r.x for r in records]), list(states)
+        return np.vstack([r.x for r in records])
+    y = [r.x for r in records]
+    x = prior_states(model, y, [r.t for r in records],
+                     None if records[0].u is None else [r.u for r in records],
+                     outputs=outputs, **{**fit_kws, "x0": _per_record(fit_kws, records)})
     out_map = OutputMap(outputs, states)
-    y = np.vstack([r.x for r in records])
-    x = np.full((len(y), len(states)), np.nan)
-    measured = []
     if out_map.selected is not None:
         for k, i in enumerate(out_map.selected):
-            x[:, i] = y[:, k]
-            measured.append(states[i])
-    return x, measured
+            x[:, i] = np.concatenate([rec[:, k] for rec in y])
+    return x
 
 
-class _Judge:
-    """Fits a candidate on each record's first part (``fraction``); every measured signal
-    scaled by its standard deviation over all the data."""
-
-    horizon = None
-
-    def __init__(self, records, fit_kws):
-        self.records, self.fit_kws, self.last = records, fit_kws, None
-        data = np.vstack([r.x for r in records])
-        self.scale = np.where(data.std(axis=0) > 0, data.std(axis=0), 1.0)
-
-    def fit(self, template, fraction):
-        parts = [_head(r, fraction) for r in self.records]
-        u = None if parts[0].u is None else [p.u for p in parts]
-        return self._fit(clone(template), [p.x for p in parts], [p.t for p in parts], u)
-
-
-class _StateForecasts(_Judge):
-    """Forecast from the state at the origin (initial state fitted to the window, as the
-    model's own selection scores), each window scored until the prior's sensitivity to
-    its start reaches the selection's limit."""
-
-    def __init__(self, records, fit_kws, horizon):
-        super().__init__(records, fit_kws)
-        shortest = min(r.n_samples for r in records)
-        self.horizon = int(HORIZON_SHARE * shortest) if horizon is None else int(horizon)
-
-    def _fit(self, model, x, t, u):
-        return model.fit(x, t=t, u=u, **self.fit_kws)
-
-    def score(self, template, fraction) -> float:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            self.last = model = self.fit(template, fraction)
-        setup = model.setup_
-        origins = prepare(self._windows(setup, fraction), setup, scale=self.scale)
-        W, everything = origins.n_windows, np.arange(origins.n_windows)
-        coef = np.repeat(model.coef_[None], W, axis=0)
-        steps = max(1, min(self.horizon // origins.stride, origins.max_steps))
-        origins = origins.subset(everything, steps)
-        prior = forecast_scores(setup, origins, np.zeros_like(coef), everything, steps)
-        origins = sensitive_leads(origins, prior)
-        return float(np.mean(forecast_scores(setup, origins, coef, everything, steps).score))
-
-    def _windows(self, setup, fraction):
-        pre, windows = setup.new_held_out().pre, []
-        for rec in self.records:
-            cut = int(round(rec.n_samples * fraction))
-            lo, hi = max(0, cut - pre), min(rec.n_samples, cut + self.horizon + 1)
-            window = Window(0, cut - lo, hi - lo)
-            window.append(rec.t[lo:hi], rec.x[lo:hi], None if rec.u is None else rec.u[lo:hi])
-            if window.lead >= 2:
-                windows.append(window)
-        if not windows:
-            raise DataError("the records are too short to forecast from the origins")
-        return windows
-
-
-class _OutputForecasts(_Judge):
-    """Fit by output error on each record's first part; the fitted simulation continues to
-    the record's end, its outputs scored after the origin."""
-
-    def __init__(self, records, outputs, fit_kws):
-        super().__init__(records, fit_kws)
-        self.outputs = outputs
-
-    def _fit(self, model, y, t, u):
-        return model.fit_outputs(y, t=t, u=u, outputs=self.outputs, **self.fit_kws)
-
-    def score(self, template, fraction) -> float:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                self.last = model = self.fit(template, fraction)
-            except ConvergenceError:
-                self.last = None
-                return float("inf")
-        out_map = OutputMap(self.outputs, model.state_names_)
-        x0s = model.x0_ if isinstance(model.x0_, list) else [model.x0_]
-        squares = []
-        for x0, rec in zip(x0s, self.records, strict=True):
-            cut = int(round(rec.n_samples * fraction))
-            try:
-                sim = out_map(simulate_quietly(model, x0, rec, self.fit_kws.get("substeps", 4),
-                                        self.fit_kws.get("u_hold", "linear")))
-            except ConvergenceError:
-                return float("inf")
-            squares.append((((sim - rec.x) / self.scale)[cut:]) ** 2)
-        value = float(np.mean(np.vstack(squares)))
-        return value if np.isfinite(value) else float("inf")
-
-
-def _head(record, fraction):
-    k = record.n_samples if fraction >= 1 else int(round(record.n_samples * fraction))
-    return Trajectory(record.t[:k], record.x[:k], None if record.u is None else record.u[:k])
+def _per_record(fit_kws, records):
+    x0 = fit_kws.get("x0")
+    if x0 is None or np.ndim(x0) != 1:
+        return x0
+    return [np.asarray(x0, float)] * len(records)

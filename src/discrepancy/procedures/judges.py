@@ -1,0 +1,83 @@
+"""How :func:`~discrepancy.choose_procedure` fits a candidate on the first part of every
+record and scores its forecasts of the rest (state forecasts here; output forecasts in
+:mod:`.output_forecasts`)."""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from ..base import clone
+from ..data.trajectory import Trajectory
+from ..errors import DataError
+from ..fitting.held_out import Window
+from ..selection.forecast import forecast_scores, prepare
+from ..selection.horizon import sensitive_leads
+
+#: where the first origin lies, as a share of each record
+FIRST_ORIGIN = 0.5
+#: the forecast length of output fits, and the most of a record a state forecast takes
+HORIZON_SHARE = 0.25
+
+
+class Judge:
+    """Fits a candidate on each record's first part (``fraction``); every measured signal
+    scaled by its standard deviation over all the data."""
+
+    horizon = None
+
+    def __init__(self, records, fit_kws):
+        self.records, self.fit_kws, self.last = records, fit_kws, None
+        data = np.vstack([r.x for r in records])
+        self.scale = np.where(data.std(axis=0) > 0, data.std(axis=0), 1.0)
+
+    def fit(self, template, fraction):
+        parts = [head(r, fraction) for r in self.records]
+        u = None if parts[0].u is None else [p.u for p in parts]
+        return self._fit(clone(template), [p.x for p in parts], [p.t for p in parts], u)
+
+
+class StateForecasts(Judge):
+    """Forecast from the state at the origin (initial state fitted to the window, as the
+    model's own selection scores), each window scored until the prior's sensitivity to
+    its start reaches the selection's limit."""
+
+    def __init__(self, records, fit_kws, horizon):
+        super().__init__(records, fit_kws)
+        shortest = min(r.n_samples for r in records)
+        self.horizon = int(HORIZON_SHARE * shortest) if horizon is None else int(horizon)
+
+    def _fit(self, model, x, t, u):
+        return model.fit(x, t=t, u=u, **self.fit_kws)
+
+    def score(self, template, fraction) -> float:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            self.last = model = self.fit(template, fraction)
+        setup = model.setup_
+        origins = prepare(self._windows(setup, fraction), setup, scale=self.scale)
+        W, everything = origins.n_windows, np.arange(origins.n_windows)
+        coef = np.repeat(model.coef_[None], W, axis=0)
+        steps = max(1, min(self.horizon // origins.stride, origins.max_steps))
+        origins = origins.subset(everything, steps)
+        prior = forecast_scores(setup, origins, np.zeros_like(coef), everything, steps)
+        origins = sensitive_leads(origins, prior)
+        return float(np.mean(forecast_scores(setup, origins, coef, everything, steps).score))
+
+    def _windows(self, setup, fraction):
+        pre, windows = setup.new_held_out().pre, []
+        for rec in self.records:
+            cut = int(round(rec.n_samples * fraction))
+            lo, hi = max(0, cut - pre), min(rec.n_samples, cut + self.horizon + 1)
+            window = Window(0, cut - lo, hi - lo)
+            window.append(rec.t[lo:hi], rec.x[lo:hi], None if rec.u is None else rec.u[lo:hi])
+            if window.lead >= 2:
+                windows.append(window)
+        if not windows:
+            raise DataError("the records are too short to forecast from the origins")
+        return windows
+
+
+def head(record, fraction):
+    k = record.n_samples if fraction >= 1 else int(round(record.n_samples * fraction))
+    return Trajectory(record.t[:k], record.x[:k], None if record.u is None else record.u[:k])
