@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test docs lint bench clean
+.PHONY: demo test test-fast docs lint bench clean
 
 $(STAMP): pyproject.toml paper/pyproject.toml constraints.txt
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV) || python3 -m venv $(VENV)
@@ -19,6 +19,10 @@ demo: $(STAMP)
 # expensive fixtures (a whole campaign, a simulated recording) are computed once.
 test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadscope
+
+# The inner loop: everything but the end-to-end tests marked slow (`make test` runs those too).
+test-fast: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadscope -m "not slow"
 
 # The site in docs/_build/html: API pages from the docstrings, the gallery (examples/) run,
 # warnings are errors; then every public name and internal link is checked.

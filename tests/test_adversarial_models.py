@@ -5,6 +5,7 @@ from __future__ import annotations
 import pickle
 
 import numpy as np
+import pytest
 import sympy as sp
 
 import discrepancy as dc
@@ -38,29 +39,38 @@ T, X, XD = circle(400)
 X1, X2 = symbol("x1"), symbol("x2")
 
 
-ROT = fast().fit(X, 0.01, x_dot=XD)                                      # g = rotation
-CALL = fast(prior=lambda x, u: np.c_[x[:, 1], 0 * x[:, 0]]).fit(X, 0.01, x_dot=XD)
-SYM = fast(prior=[X2, sp.Integer(0)]).fit(X, 0.01, x_dot=XD)
 S = np.linspace(0.5, 3, 200)[:, None]
-LOG = fast(feature_library=dc.CustomLibrary([sp.log(X1)])).fit(S, 0.01, x_dot=2 * np.log(S))
-FUNC = fast(feature_library=dc.CustomLibrary(functions={"sq": np.square})).fit(S, 0.01, x_dot=S ** 2)
 U = np.cos(T)[:, None]
-WITH_U = fast(feature_library=dc.PolynomialLibrary(1)).fit(X[:, :1], 0.01, u=U, x_dot=-X[:, :1] + U)
-MAP = fast(discrete_time=True, feature_library=dc.PolynomialLibrary(1)).fit(0.9 ** np.arange(50.0)[:, None])
 V = np.linspace(-2, 2, 401)[:, None]
-SIGN = fast(feature_library=dc.CustomLibrary([sp.sign(X1)])).fit(V, 0.01, x_dot=-np.sign(V))
-SQUARE = fast(feature_library=dc.PolynomialLibrary(2)).fit(S, 1.0, x_dot=S ** 2)   # x' = x^2
-NOISY = fast().fit(X + 0.01 * np.random.default_rng(0).normal(size=X.shape), 0.01)
-UNC = NOISY.bootstrap(X, 0.01, x_dot=XD, n_resamples=20)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def fitted_models():
+    """The rows' fitted models (ROT, CALL, ...), fitted once when the module's first row runs,
+    not at collection (every worker collects every module), and set as module globals."""
+    global ROT, CALL, SYM, LOG, FUNC, WITH_U, MAP, SIGN, SQUARE, NOISY, UNC
+    ROT = fast().fit(X, 0.01, x_dot=XD)                                      # g = rotation
+    CALL = fast(prior=lambda x, u: np.c_[x[:, 1], 0 * x[:, 0]]).fit(X, 0.01, x_dot=XD)
+    SYM = fast(prior=[X2, sp.Integer(0)]).fit(X, 0.01, x_dot=XD)
+    LOG = fast(feature_library=dc.CustomLibrary([sp.log(X1)])).fit(S, 0.01, x_dot=2 * np.log(S))
+    FUNC = fast(feature_library=dc.CustomLibrary(functions={"sq": np.square})).fit(S, 0.01, x_dot=S ** 2)
+    WITH_U = fast(feature_library=dc.PolynomialLibrary(1)).fit(X[:, :1], 0.01, u=U, x_dot=-X[:, :1] + U)
+    MAP = fast(discrete_time=True, feature_library=dc.PolynomialLibrary(1)).fit(0.9 ** np.arange(50.0)[:, None])
+    SIGN = fast(feature_library=dc.CustomLibrary([sp.sign(X1)])).fit(V, 0.01, x_dot=-np.sign(V))
+    SQUARE = fast(feature_library=dc.PolynomialLibrary(2)).fit(S, 1.0, x_dot=S ** 2)   # x' = x^2
+    NOISY = fast().fit(X + 0.01 * np.random.default_rng(0).normal(size=X.shape), 0.01)
+    UNC = NOISY.bootstrap(X, 0.01, x_dot=XD, n_resamples=20)
+
+
 TS = np.linspace(0, 1, 11)
 
 
-def score(metric, m=ROT, **kw):
-    return m.score(X, 0.01, x_dot=XD, metric=metric, **kw)
+def score(metric, m=None, **kw):
+    return (ROT if m is None else m).score(X, 0.01, x_dot=XD, metric=metric, **kw)
 
 
-def sim(x0=(0.0, 1.0), t=TS, m=ROT, **kw):
-    return m.simulate(x0, t, **kw)
+def sim(x0=(0.0, 1.0), t=TS, m=None, **kw):
+    return (ROT if m is None else m).simulate(x0, t, **kw)
 
 
 def exact(expected, atol=1e-6):

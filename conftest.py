@@ -1,0 +1,38 @@
+"""Suite-wide scheduling: the heaviest modules start first.
+
+``make test`` runs on two workers with ``--dist loadscope`` (a module's tests stay on one
+worker, so its expensive module fixtures are computed once). xdist hands modules out in
+order of their number of tests, which put the few long end-to-end tests (the paper's
+experiments, marked ``slow``) last: one worker ran them alone while the other idled.
+Here modules are ordered by their number of ``slow`` tests, then by their number of tests
+(longest first, as in the classic longest-processing-time rule), and xdist keeps that order.
+"""
+from __future__ import annotations
+
+import collections
+
+import pytest
+
+
+def pytest_collection_modifyitems(config, items):
+    """Group the items by module, modules with the most ``slow`` tests first (stable)."""
+    modules: dict[str, list] = collections.defaultdict(list)
+    for item in items:
+        modules[item.nodeid.split("::", 1)[0]].append(item)
+
+    def weight(tests):
+        return (sum(t.get_closest_marker("slow") is not None for t in tests), len(tests))
+
+    ordered = sorted(modules.values(), key=weight, reverse=True)
+    items[:] = [item for tests in ordered for item in tests]
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """Loadscope, keeping the collection's order (heaviest first) instead of re-sorting."""
+    if config.getvalue("dist") != "loadscope":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    config.option.loadscopereorder = False
+    return LoadScopeScheduling(config, log)
