@@ -1,34 +1,15 @@
-"""The constrained MPC campaigns end to end (quick modes): what the issue asks them to show."""
-import json
+"""The cart-pendulum MPC campaign end to end (quick mode): what the issue asks it to show.
 
-import numpy as np
+One campaign per module, so that the test workers run the campaigns side by side."""
 import pytest
 from PIL import Image
 
-from discrepancy_paper.experiments import get_experiment
-
-CONTROLLERS = ["flawed + TVLQR", "hybrid + TVLQR", "hybrid + MPC",
-               "hybrid + MPC + re-identification"]
-
-
-def reproduce(name, tmp_path_factory):
-    out = get_experiment(name)(tmp_path_factory.mktemp(name), quick=True)
-    return out, json.loads((out / "results.json").read_text())
+from campaigns import CONTROLLERS, quick_run
 
 
 @pytest.fixture(scope="module")
 def cart(tmp_path_factory):
-    return reproduce("cart-mpc", tmp_path_factory)
-
-
-@pytest.fixture(scope="module")
-def grid(tmp_path_factory):
-    return reproduce("cart-leaderboard", tmp_path_factory)
-
-
-@pytest.fixture(scope="module")
-def single(tmp_path_factory):
-    return reproduce("pendulum-cart-mpc", tmp_path_factory)
+    return quick_run("cart-mpc", tmp_path_factory)
 
 
 @pytest.mark.slow
@@ -103,32 +84,3 @@ def test_cart_output_feedback_and_the_smoothed_logs_give_the_exact_terms(cart):
     rti = cpu["real-time iteration (one SQP step, DAQP), state feedback"]
     ipopt = cpu["IPOPT (at most 5 iterations, warm start), state feedback"]
     assert rti["median"] < ipopt["median"] / 4 and rti["worst"] < ipopt["worst"]
-
-
-@pytest.mark.slow
-def test_leaderboard_maps_agree_with_its_cells(grid):
-    out, res = grid
-    assert (out / "success_maps.png").stat().st_size > 1000
-    cells = res["grid"]["cells"]
-    assert len(cells) == res["grid"]["n_cells"] == 2
-    for c in CONTROLLERS:
-        assert res["grid"]["success_counts"][c] == sum(r[c]["success"] for r in cells)
-        flat = np.concatenate([np.ravel(m) for m in res["success_maps"][c].values()])
-        assert flat.sum() == res["grid"]["success_counts"][c]
-    assert all(not r["flawed + TVLQR"]["success"] for r in cells)
-    assert all(r["hybrid + MPC + re-identification"]["success"] for r in cells)
-
-
-@pytest.mark.slow
-def test_single_pendulum_campaign_learns_the_exact_terms_and_succeeds(single):
-    out, res = single
-    assert (out / "nominal_runs.png").stat().st_size > 1000
-    exact = res["exact_coefficients"]
-    learned = res["learned_from_flawed_attempt"]
-    assert learned["ds"]["u"] == pytest.approx(exact["u in (ds)'"], rel=0.05)
-    assert learned["dphi"]["cos(phi) u"] == pytest.approx(exact["cos(phi) u in (dphi)'"],
-                                                          rel=0.1)
-    assert res["nominal_runs"]["hybrid + MPC"]["success"]
-    assert not res["nominal_runs"]["flawed + TVLQR"]["success"]
-    study = res["perturbed_cases"]
-    assert study["success_counts"]["hybrid + MPC"] == study["n_cases"] == 3
