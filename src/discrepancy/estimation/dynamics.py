@@ -27,7 +27,7 @@ from ..errors import (
 )
 from ..fitting.prior import Prior
 from ..fitting.setup import resolve_names
-from ..hybrid.casadi_form import _casadi, hybrid_function, prior_expression
+from ..hybrid.casadi_form import casadi_module, hybrid_function, prior_expression
 
 BACKENDS = ("auto", "casadi", "numpy")
 
@@ -155,13 +155,13 @@ def check_points(n: int, r: int):
 
 
 def _model_function(model):
-    ca = _casadi()
+    ca = casadi_module()
     f = hybrid_function(model, check_points=check_points(model.n_states_, model.n_inputs_))
     return _parametrised(ca, f, model.n_states_, model.n_inputs_)
 
 
 def _prior_function(prior: Prior):
-    ca = _casadi()
+    ca = casadi_module()
     n, r = prior.n, len(prior.names) - prior.n
     x, u = ca.SX.sym("x", n), ca.SX.sym("u", r)
     column = prior_expression(prior, x, u, check_points=check_points(n, r))

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..hybrid.casadi_form import _casadi, rk4_step
+from ..hybrid.casadi_form import casadi_module, rk4_step
 
 #: origins per compiled call
 ORIGINS = 256
@@ -42,7 +42,7 @@ class Forecaster:
     """Forecasts of one support's model (``likelihood.f``) over ``horizon`` samples."""
 
     def __init__(self, likelihood, horizon: int, substeps: int):
-        ca = _casadi()
+        ca = casadi_module()
         N, r, f = likelihood.N, likelihood.r, likelihood.f
         self.empty = f.size1_in(2) == 0
         if self.empty:                   # the prior alone: a dummy parameter keeps one call

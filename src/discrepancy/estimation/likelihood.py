@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..hybrid.casadi_form import _casadi, library_columns, prior_expression
+from ..hybrid.casadi_form import casadi_module, library_columns, prior_expression
 from .backends import CasadiOps
 from .compiled import BLOCK, flat_update, layout, run_blocks, step_expressions
 from .disturbances import augment_casadi
@@ -49,7 +49,7 @@ class InnovationLikelihood:
     """
 
     def __init__(self, setup, measurement, equations, substeps: int, support: np.ndarray):
-        ca = _casadi()
+        ca = casadi_module()
         n, r = setup.n_states, setup.n_inputs
         self.n, self.k, self.support = n, measurement.k, support
         self.N = n + len(equations)
@@ -81,7 +81,7 @@ class InnovationLikelihood:
     def objective(self, records: list[LikelihoodRecord]):
         """CasADi Function ``(ξ (support), q (N), r (k)) -> (mean nll, its gradient)`` over
         the weighted samples of ``records`` (the mean over their total weight)."""
-        ca = _casadi()
+        ca = casadi_module()
         xi, q, r = ca.MX.sym("xi", int(self.support.sum())), ca.MX.sym("q", self.N), \
             ca.MX.sym("r", self.k)
         total, weight = 0, sum(float(rec.weights.sum()) for rec in records)

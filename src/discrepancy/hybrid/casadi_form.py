@@ -22,7 +22,8 @@ from ..symbolic import feature_name, to_casadi
 TRACE_TOLERANCE = 1e-9
 
 
-def _casadi():
+def casadi_module():
+    """The casadi module (an optional extra), or a clear error naming what needs it."""
     return require("casadi", purpose="compiled simulation and output-error fitting")
 
 
@@ -37,7 +38,7 @@ def prior_expression(prior, x, u, *, check_points=None):
     ``prior`` is a :class:`~discrepancy.fitting.prior.Prior`. ``check_points``: an optional
     ``(states (k, n), inputs (k, r) or None)`` on which a traced callable must agree with
     itself evaluated by numpy."""
-    ca = _casadi()
+    ca = casadi_module()
     n = x.numel()
     if prior.is_symbolic:
         names = variables(prior.names, x, u)
@@ -52,7 +53,7 @@ def prior_expression(prior, x, u, *, check_points=None):
 
 
 def _trace(prior, x, u):
-    ca = _casadi()
+    ca = casadi_module()
     n, r = x.numel(), u.numel()
     xs = np.empty((1, n), dtype=object)
     xs[0, :] = [x[i] for i in range(n)]
@@ -90,7 +91,7 @@ def _check_trace(prior, traced, xs, us):
 
 def library_columns(expressions, names, x, u):
     """CasADi column ``(p, 1)`` of the library's columns (sympy expressions) at ``x``, ``u``."""
-    ca = _casadi()
+    ca = casadi_module()
     symbols = variables(names, x, u)
     return ca.vertcat(*[ca.SX(to_casadi(e, symbols, term=feature_name(e, names)))
                         for e in expressions])
@@ -99,7 +100,7 @@ def library_columns(expressions, names, x, u):
 def hybrid_function(model, *, check_points=None):
     """CasADi Function ``f(x (n,), u (r,)) -> ẋ (n,)`` of a fitted hybrid model, built from its
     active terms and its prior (traced when it is a callable)."""
-    ca = _casadi()
+    ca = casadi_module()
     x, u = ca.SX.sym("x", model.n_states_), ca.SX.sym("u", model.n_inputs_)
     active = np.flatnonzero(np.any(model.coef_ != 0, axis=0))
     g = ca.SX.zeros(model.n_states_, 1)
@@ -115,7 +116,7 @@ def rk4_step(f, n_states: int, n_inputs: int, substeps: int, *, n_parameters: in
     """CasADi Function ``step(x (n,), U (r (2S+1),), h, [p]) -> x_next`` : ``S`` classical
     RK4 steps of length ``h / S`` with the input at the stage times (``U`` column-major:
     the ``2S + 1`` stage values of input 0, then of input 1, ...)."""
-    ca = _casadi()
+    ca = casadi_module()
     width = 2 * substeps + 1
     x = ca.SX.sym("x", n_states)
     stages = ca.SX.sym("U", n_inputs * width)
@@ -138,7 +139,7 @@ def rk4_substep(f, n_states: int, n_inputs: int, n_parameters: int):
     classical RK4 step of length ``dt`` with the input at its start, middle and end (``U``
     column-major: the three values of input 0, then of input 1, ...). The same arithmetic as
     one substep of :func:`rk4_step`."""
-    ca = _casadi()
+    ca = casadi_module()
     x, stages, dt = ca.SX.sym("x", n_states), ca.SX.sym("U", 3 * n_inputs), ca.SX.sym("dt")
     p = ca.SX.sym("p", n_parameters)
 
@@ -154,7 +155,7 @@ def chained_step(substep, n_inputs: int, substeps: int):
     ``dt = h / S``, substep ``j`` taking stage values ``2j, 2j+1, 2j+2`` of every input (the
     layout of :func:`stage_columns`). A loop (CasADi ``mapaccum``), not an unrolled
     expression, so its size does not grow with ``substeps``."""
-    ca = _casadi()
+    ca = casadi_module()
     width = 2 * substeps + 1
     z = ca.MX.sym("z", substep.size1_in(0))
     stages = ca.MX.sym("U", n_inputs * width)

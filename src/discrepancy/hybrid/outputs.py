@@ -10,6 +10,7 @@ import sympy as sp
 
 from ..errors import ParameterError, ShapeError, UnknownNameError
 from ..symbolic import adopt, compile_numpy, symbol, to_casadi
+from .casadi_form import casadi_module
 
 
 class OutputMap:
@@ -52,9 +53,7 @@ class OutputMap:
 
     def _casadi_jacobian(self):
         """``dh/dx`` by CasADi (exact through saturations such as ``Min``)."""
-        from .casadi_form import _casadi
-
-        ca = _casadi()
+        ca = casadi_module()
         x = ca.SX.sym("x", self.n)
         symbols = {name: x[i] for i, name in enumerate(self.state_names)}
         h = ca.vertcat(*[ca.SX(to_casadi(e, symbols, term=f"outputs[{i}]"))

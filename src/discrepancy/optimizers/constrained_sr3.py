@@ -30,7 +30,7 @@ from ..constraints import InstanceOf, Integral, Interval, Options, Predicate
 from ..errors import ParameterError, ShapeError
 from .base import Optimizer, register
 from .linear_constraints import LinearConstraints, reorder, restricted_rows, solve_qp
-from .sr3 import LAMBDA, PROX, REGULARIZERS, SR3, relax
+from .sr3 import LAMBDA, PROX, REGULARIZERS, SR3, relax, relaxed_solver
 
 _MATRIX = Predicate(lambda v: np.ndim(v) == 2, "a 2-D array (constraints, n_targets n_features)")
 _VECTOR = Predicate(lambda v: np.ndim(v) == 1, "a 1-D array (constraints,)")
@@ -173,7 +173,7 @@ class ConstrainedSR3(Optimizer):
         prox = PROX[self.regularizer.replace("weighted_", "")]
         nu = float(self.relax_coeff_nu)
         make = (lambda gram: _equality_update(gram, nu, eq_lhs, eq_rhs)) if eq_lhs is not None \
-            else (lambda gram: _unconstrained_update(gram, nu))
+            else (lambda gram: relaxed_solver(gram, nu))
         full, sparse = relax(self, stats, start, prox, lam * nu, make)
         self.coef_full_ = full.T * scale[None, :]
         return sparse.T
@@ -185,10 +185,6 @@ def _joined(parts, size):
         return None, None
     return np.vstack([a for a, _ in parts]).reshape(-1, size), np.concatenate([b for _, b in parts])
 
-
-def _unconstrained_update(gram, nu):
-    from .sr3 import _unconstrained
-    return _unconstrained(gram, nu)
 
 
 def _equality_update(gram, nu, lhs, rhs):

@@ -150,7 +150,7 @@ class SR3(Optimizer):
     def _solve(self, stats, scale):
         prox, lam = PROX[self.regularizer.replace("weighted_", "")], self._lam(stats, scale)
         full, sparse = relax(self, stats, self._start(stats, scale), prox, lam,
-                             lambda gram: _unconstrained(gram, float(self.relax_coeff_nu)))
+                             lambda gram: relaxed_solver(gram, float(self.relax_coeff_nu)))
         self.coef_full_ = full.T * scale[None, :]
         coef = sparse.T
         if self.unbias:
@@ -159,7 +159,7 @@ class SR3(Optimizer):
 
 
 
-def _unconstrained(gram, nu):
+def relaxed_solver(gram, nu):
     """The relaxed update ``w = (G + I/ν)⁻¹ (Θᵀy + v/ν)`` for Gram matrix ``gram``."""
     factor = scipy.linalg.cho_factor(gram + np.eye(len(gram)) / nu)
     return lambda rhs, sparse: scipy.linalg.cho_solve(factor, rhs + sparse / nu)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...hybrid.casadi_form import (
-    _casadi,
+    casadi_module,
     library_columns,
     prior_expression,
     rk4_step,
@@ -46,7 +46,7 @@ class ShootingModel:
     """
 
     def __init__(self, setup, substeps: int, *, check_points=None):
-        ca = _casadi()
+        ca = casadi_module()
         n, r = setup.n_states, setup.n_inputs
         p = setup.n_features
         self.n, self.r, self.p, self.substeps = n, r, p, substeps
@@ -119,7 +119,7 @@ def _sensitivity_step(step, n: int, n_parameters: int):
     """One step of the state and its forward sensitivities, as one augmented state
     ``[x, vec(S_x0), vec(S_coef)]`` (column-major): ``S' = A S (+ B)`` with ``A = ∂step/∂x``
     and ``B = ∂step/∂coef``, differentiated symbolically once for the step."""
-    ca = _casadi()
+    ca = casadi_module()
     width = n + n * n + n * n_parameters
     z = ca.SX.sym("z", width)
     cols = ca.SX.sym("U", step.size1_in(1))
