@@ -13,6 +13,12 @@ import collections
 
 import pytest
 
+# Imported here, before the workers start: xdist's controller imports the module of every
+# warning a worker reports, from its own threads; two such imports racing through the
+# package's first import met a partially initialised ``discrepancy.energy`` and took the
+# run down (ImportError in the controller, both workers lost).
+import discrepancy  # noqa: F401
+
 
 def pytest_collection_modifyitems(config, items):
     """Group the items by module, modules with the most ``slow`` tests first (stable)."""
