@@ -2,7 +2,7 @@
 
 Rows are grid points at sample times (pointwise form: ``u_t - N_m`` against the library on
 the jet ``[u, u_x, ..., inputs]``), or test-function centres (weak form). Either way they go
-through the same blocked accumulation as trajectories (:mod:`discrepancy.accumulate`), with
+through the same blocked accumulation as trajectories (:mod:`discrepancy.fitting.accumulate`), with
 cross-validation folds made of whole snapshots (segments of consecutive times dealt to the
 folds in turn), so the STLSQ threshold is chosen as for ODEs, in memory, streamed from disk
 or on Dask alike.

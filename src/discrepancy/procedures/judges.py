@@ -32,6 +32,7 @@ class Judge:
         self.scale = np.where(data.std(axis=0) > 0, data.std(axis=0), 1.0)
 
     def fit(self, template, fraction):
+        """A clone of ``template`` fitted on the first ``fraction`` of every record."""
         parts = [head(r, fraction) for r in self.records]
         u = None if parts[0].u is None else [p.u for p in parts]
         return self._fit(clone(template), [p.x for p in parts], [p.t for p in parts], u)
@@ -51,6 +52,8 @@ class StateForecasts(Judge):
         return model.fit(x, t=t, u=u, **self.fit_kws)
 
     def score(self, template, fraction) -> float:
+        """Mean scaled squared forecast error of ``template`` fitted up to the origin at
+        ``fraction`` of every record (the fitted model kept in ``self.last``)."""
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             self.last = model = self.fit(template, fraction)
@@ -79,5 +82,6 @@ class StateForecasts(Judge):
 
 
 def head(record, fraction):
+    """The first ``fraction`` of ``record`` (all of it at ``fraction >= 1``)."""
     k = record.n_samples if fraction >= 1 else int(round(record.n_samples * fraction))
     return Trajectory(record.t[:k], record.x[:k], None if record.u is None else record.u[:k])

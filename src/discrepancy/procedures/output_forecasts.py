@@ -40,6 +40,8 @@ class OutputForecasts(Judge):
         return model.fit_outputs(y, t=t, u=u, outputs=self.outputs, **self.fit_kws)
 
     def fit(self, template, fraction):
+        """``template`` fitted on the first ``fraction`` of every record: its whole
+        procedure at its first origin, later only its support refitted (module doc)."""
         first = self.proposed.get(id(template))
         if first is None or first.prior_only_:
             return super().fit(template, fraction)
@@ -52,6 +54,8 @@ class OutputForecasts(Judge):
         return model
 
     def score(self, template, fraction) -> float:
+        """Mean scaled squared output error of the fitted simulation after the origin at
+        ``fraction`` of every record, to the record's end (``inf`` if it diverges)."""
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
