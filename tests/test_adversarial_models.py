@@ -46,9 +46,17 @@ V = np.linspace(-2, 2, 401)[:, None]
 
 @pytest.fixture(scope="module", autouse=True)
 def fitted_models():
-    """The rows' fitted models (ROT, CALL, ...), fitted once when the module's first row runs,
-    not at collection (every worker collects every module), and set as module globals."""
+    """The rows' fitted models, fitted when the module's first row runs (see prepare)."""
+    prepare()
+
+
+def prepare():
+    """The rows' fitted models (ROT, CALL, ...) as module globals, fitted once: not at
+    collection (every worker collects every module); also called by the reach test, which
+    runs rows of this table in a process where this module's tests did not run."""
     global ROT, CALL, SYM, LOG, FUNC, WITH_U, MAP, SIGN, SQUARE, NOISY, UNC
+    if "UNC" in globals():
+        return
     ROT = fast().fit(X, 0.01, x_dot=XD)                                      # g = rotation
     CALL = fast(prior=lambda x, u: np.c_[x[:, 1], 0 * x[:, 0]]).fit(X, 0.01, x_dot=XD)
     SYM = fast(prior=[X2, sp.Integer(0)]).fit(X, 0.01, x_dot=XD)

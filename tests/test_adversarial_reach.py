@@ -22,6 +22,8 @@ def _reach_all(tmp_path, monkeypatch) -> dict[str, str | None]:
         missing = [case for case in table.CASES if case.id not in adversarial.REACHED]
         if not missing:
             continue
+        if hasattr(table, "prepare"):   # module globals its rows use, set by a fixture
+            table.prepare()
         if hasattr(table, "PRELUDE"):   # rows run in a child process
             results = run_isolated(table.PRELUDE, missing, cwd=tmp_path)
             runs = [lambda case=case, results=results: check_isolated(case, results)
