@@ -21,7 +21,6 @@ from discrepancy.control import (
     swing_up_errors,
     tvlqr,
 )
-from discrepancy.control.codegen import compiled
 from discrepancy.errors import (
     DataError,
     InfeasibleError,
@@ -31,6 +30,7 @@ from discrepancy.errors import (
     ResourceError,
     ShapeError,
 )
+from discrepancy.hybrid.codegen import compiled
 
 # a damped oscillator q'' = -q - 0.1 q': H = (q^2 + dq^2) / 2 loses 0.1 dq^2 per second
 T = np.arange(2000) * 0.01

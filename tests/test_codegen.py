@@ -7,9 +7,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from discrepancy.control import MPC, codegen
-from discrepancy.control.codegen import compiled
+from discrepancy.control import MPC
 from discrepancy.errors import CompilationWarning
+from discrepancy.hybrid import codegen
+from discrepancy.hybrid.codegen import compiled
 
 needs_cc = pytest.mark.skipif(codegen.compiler() is None, reason="no C compiler")
 

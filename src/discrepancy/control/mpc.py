@@ -74,7 +74,8 @@ class MPC:
         qp_solver: the real-time iteration's QP solver (a CasADi conic: ``"daqp"``,
             ``"qpoases"``, ``"osqp"``, ``"qrqp"``, ...).
         compile: the real-time iteration's functions as compiled C, cached on disk
-            (:func:`~.codegen.compiled`; needs a C compiler, else warns and runs uncompiled).
+            (:func:`~discrepancy.hybrid.codegen.compiled`; needs a C compiler, else warns and
+            runs uncompiled).
     """
 
     def __init__(self, model, *, dt: float, horizon: int = 25, Q=None, R=1.0,

@@ -16,8 +16,8 @@ import warnings
 import numpy as np
 
 from ..errors import ConvergenceWarning
+from ..hybrid.casadi_form import casadi_module, library_columns, prior_expression
 from ..runge_kutta import runge_kutta_step
-from .codegen import ca
 
 FOLDS = 5
 
@@ -93,8 +93,7 @@ def _refit(stats, support) -> np.ndarray:
 def _flow_functions(setup, substeps: int):
     """CasADi ``flow(x, u, vec(Ξ), dt)`` (the hybrid model's held-input RK4 step with
     coefficients ``Ξ``) and ``theta(x, u)`` (the library's columns), for one sample each."""
-    from ..hybrid.casadi_form import library_columns, prior_expression
-
+    ca = casadi_module()
     n, r, p = setup.n_states, setup.n_inputs, setup.n_features
     x, u = ca.SX.sym("x", n), ca.SX.sym("u", r)
     xi, dt = ca.SX.sym("xi", n * p), ca.SX.sym("dt")

@@ -16,10 +16,11 @@ converge to the NLP's solution.
 
 Two CasADi functions do the work: ``linearise`` (model-dependent: the held-input RK4 step
 and its Jacobians, mapped over the horizon) and ``condense`` (depends only on the sizes,
-weights and limits), both compiled to C on request (:func:`.codegen.compiled`): re-identified
-models with the same settings reuse the compiled ``condense``. Written with CasADi rather
-than a hand-coded Riccati/condensing routine: the same expression graph gives the QP, its
-sparsity and the generated code.
+weights and limits), both compiled to C on request
+(:func:`~discrepancy.hybrid.codegen.compiled`): re-identified models with the same
+settings reuse the compiled ``condense``. Written with CasADi rather than a hand-coded
+Riccati/condensing routine: the same expression graph gives the QP, its sparsity and the
+generated code.
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ParameterError
-from .codegen import compiled
+from ..hybrid.codegen import compiled
 from .dynamics import rk4_step
 
 
@@ -110,7 +111,8 @@ class RealTimeIteration:
         f: CasADi dynamics; dt, substeps, horizon, Q, R, bounds, soft_penalty: as the MPC's
             (``bounds``: :meth:`~.limits.Limits.sized` arrays, rates per second).
         qp_solver: a CasADi conic plugin name (``casadi.has_conic``); ``"daqp"`` default.
-        compile: generate and compile C for both functions (:func:`.codegen.compiled`).
+        compile: generate and compile C for both functions
+            (:func:`~discrepancy.hybrid.codegen.compiled`).
     """
 
     def __init__(self, f, *, dt, substeps, horizon, Q, R, bounds, soft_penalty,

@@ -20,11 +20,9 @@ import tempfile
 import warnings
 from pathlib import Path
 
-from .._optional import require
 from ..constraints import check_argument
 from ..errors import CompilationWarning
-
-ca = require("casadi", purpose="discrepancy.control")
+from .casadi_form import casadi_module
 
 #: optimisation flag: -O1 gives most of -O2's speed on CasADi's straight-line code at a
 #: fraction of its compile time (measured on the cart MPC's condensing: 21 s against 160 s)
@@ -60,6 +58,7 @@ def compiled(function, *, enabled=True):
     check_argument("compile", enabled, bool)
     if not enabled:
         return function
+    ca = casadi_module()
     name = function.name()
     try:
         with tempfile.TemporaryDirectory() as tmp:
