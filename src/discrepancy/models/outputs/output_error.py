@@ -16,6 +16,7 @@ data. A fixed threshold instead drops terms whose coefficients stay below it.
 """
 from __future__ import annotations
 
+import copy
 import warnings
 
 import numpy as np
@@ -23,6 +24,7 @@ import scipy.optimize
 
 from ...data.trajectory import as_trajectories
 from ...errors import DataError, ParameterError, ShapeError
+from ...fitting.accumulate import single_threaded_blas
 from ...hybrid.inputs import check_hold, stage_inputs
 
 #: relative ridge on the scaled coefficients while supports are compared
@@ -45,6 +47,15 @@ class _Record:
                                                               substeps, hold=hold)
         self.m = len(self.t)
 
+    def head(self, samples: int) -> _Record:
+        """The first ``samples`` samples of this record (a shallow copy)."""
+        out = copy.copy(self)
+        out.t, out.y, out.h = self.t[:samples], self.y[:samples], self.h[:samples - 1]
+        out.u = None if self.u is None else self.u[:samples]
+        out.stages = None if self.stages is None else self.stages[:samples - 1]
+        out.m = len(out.t)
+        return out
+
 
 class OutputErrorFit:
     """The pieces of one fit: model discretisation, records, output map and scales."""
@@ -59,6 +70,13 @@ class OutputErrorFit:
         self.coef_scale = np.ones(self.n * self.p)      # set from the data by set_coef_scale
         self.bounds = (np.full(self.n, -np.inf), np.full(self.n, np.inf))   # of x0
         self.fixed = np.zeros((self.n, self.p))   # coefficients outside the fitted support
+
+    def head(self, samples: int) -> OutputErrorFit:
+        """This fit on the first ``samples`` samples of every record (same scales, bounds and
+        fixed coefficients; the model and its compiled code shared)."""
+        out = copy.copy(self)
+        out.records = [r.head(samples) for r in self.records]
+        return out
 
     # ---------------------------------------------------------------- residuals
     def _parts(self, theta, support):
@@ -88,7 +106,7 @@ class OutputErrorFit:
             dh = self.out_map.jacobian(states) / self.y_scale[None, :, None]   # (m, k, n)
             jac = np.zeros((states.shape[0], self.out_map.k, width))
             jac[:, :, :len(index)] = np.einsum("mkn,mnc->mkc", dh,
-                                               sens.d_coef[fit_rows][:, :, index]) \
+                                               sens.d_coefficients(index)[fit_rows]) \
                 * self.coef_scale[index]
             offset = len(index) + i * self.n
             jac[:, :, offset:offset + self.n] = np.einsum("mkn,mnj->mkj", dh,
@@ -122,7 +140,7 @@ class OutputErrorFit:
                                 np.tile(self.bounds[1], len(self.records))])
         theta0 = np.clip(np.concatenate([coef.ravel()[index] / self.coef_scale[index],
                                          x0s.ravel()]), lower, upper)
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"), single_threaded_blas():
             result = self._least_squares(support, rows, ridge, theta0, lower, upper,
                                          max_evaluations)
         _, flat, x0s = self._parts(result.x, support)

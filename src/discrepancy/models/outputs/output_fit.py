@@ -22,10 +22,12 @@ from .output_error import (
     warn_if_not_converged,
 )
 from .output_error import x0_bounds as bounds_of
-from .shooting import ShootingModel
+from .shooting import COMPILE_STEPS, ShootingModel
 
 #: simulations allowed per support on the path (the final refit may use more)
 PATH_EVALUATIONS = 200
+#: samples of each record on which the prior's candidate initial states are compared
+START_WINDOW = 2000
 
 
 @dataclass
@@ -50,8 +52,9 @@ class SupportScore:
         return float(np.sqrt(self.heldout_mse))
 
 
-def prepare(setup, records, *, outputs, x0, x0_bounds, substeps):
-    """The fit's pieces for ``setup`` and the records: ``(fit, x0s, all rows of each)``."""
+def prepare(setup, records, *, outputs, x0, x0_bounds, substeps, free=None):
+    """The fit's pieces for ``setup`` and the records: ``(fit, x0s, all rows of each)``.
+    ``free`` ``(n, p)``: the coefficients that may be fitted (default: the allowed ones)."""
     r = 0 if records[0].u is None else records[0].u.shape[1]
     if r != setup.n_inputs:
         raise ShapeError(f"u has {r} input columns; the model has {setup.n_inputs}")
@@ -61,8 +64,12 @@ def prepare(setup, records, *, outputs, x0, x0_bounds, substeps):
                          f"{out_map.k} measured quantities {out_map.names}")
     x0s = initial_states(x0, records, out_map, setup.n_states)
     points = (x0s, None if not r else np.repeat(records[0].u[:1], len(x0s), axis=0))
-    shooting = ShootingModel(setup, substeps, check_points=points)
-    fit = OutputErrorFit(setup, records, out_map, shooting, _allowed(setup))
+    allowed = _allowed(setup)
+    steps = sum(rec.m - 1 for rec in records)
+    shooting = ShootingModel(setup, substeps, check_points=points,
+                             free=allowed if free is None else free,
+                             compile=steps >= COMPILE_STEPS)
+    fit = OutputErrorFit(setup, records, out_map, shooting, allowed)
     fit.bounds = bounds_of(x0_bounds, setup.n_states)
     check_identifiable(fit)
     return fit, x0s, [np.ones(rec.m, bool) for rec in records]
@@ -96,7 +103,10 @@ def fit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, max
 def _prior_start(fit, x0s, rows, *, guessed: bool):
     """Initial states that fit the outputs best with the prior alone. Without a guess the
     unmeasured states are tried at 0 and at plus and minus the outputs' typical size (a
-    state at 0 can be a fixed point the fit cannot leave)."""
+    state at 0 can be a fixed point the fit cannot leave). The starts are compared on the
+    first :data:`START_WINDOW` samples of each record and only the best is then fitted to
+    all of them (an initial state shows in the first samples; on long records, fitting every
+    start to everything costs seconds and picks the same one)."""
     none = np.zeros((fit.n, fit.p), bool)
     hidden = sorted(set(range(fit.n)) - fit.out_map.measured)
     starts = [x0s]
@@ -106,12 +116,15 @@ def _prior_start(fit, x0s, rows, *, guessed: bool):
             other = x0s.copy()
             other[:, hidden] = sign * size
             starts.append(np.clip(other, *fit.bounds))
+    short = all(r.m <= START_WINDOW for r in fit.records)
+    window = fit if short else fit.head(START_WINDOW)
+    window_rows = rows if short else [w[:START_WINDOW] for w in rows]
     best = None
     for start in starts:
-        _, x0s, cost = fit.solve(none, fit.fixed, start, rows, 0.0)
+        _, x0s, cost = window.solve(none, fit.fixed, start, window_rows, 0.0)
         if best is None or cost < best[1]:
             best = (x0s, cost)
-    return best[0]
+    return best[0] if short else fit.solve(none, fit.fixed, best[0], rows, 0.0)[1]
 
 
 def _check_options(max_terms, holdout, tolerance):
@@ -213,10 +226,10 @@ def refit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, c
     coefficients refitted (``coefficients=True``) or all held (only initial states).
     Returns ``(coef, x0s, fit)``."""
     records, _ = records_of(model, y, t, u, substeps, u_hold)
-    fit, x0s, everything = prepare(model.setup_, records, outputs=outputs, x0=x0,
-                                   x0_bounds=x0_bounds, substeps=substeps)
-    fit.fixed = model.coef_.copy()
     support = (model.coef_ != 0) if coefficients else np.zeros_like(model.coef_, bool)
+    fit, x0s, everything = prepare(model.setup_, records, outputs=outputs, x0=x0,
+                                   x0_bounds=x0_bounds, substeps=substeps, free=support)
+    fit.fixed = model.coef_.copy()
     fit.set_coef_scale(x0s)
     coef, x0s, _ = fit.solve(support, model.coef_, x0s, everything, 0.0)
     if coefficients:

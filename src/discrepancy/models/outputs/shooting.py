@@ -6,6 +6,13 @@ and CasADi differentiates one step of the discrete map symbolically; the sensiti
 the state to the initial state and to every coefficient ride along as extra state (forward
 sensitivities of the discrete map, exact), ``BLOCK`` steps per compiled call, so the cost
 grows linearly with the record and CasADi never builds a graph as long as the record.
+
+Only the coefficients a fit may change (``free``) get sensitivities, and on long records
+both block functions are compiled to C (:func:`~discrepancy.hybrid.codegen.compiled`, cached
+by source): the same operations in the same order, so the same numbers as CasADi's virtual
+machine, about six times faster (``benchmarks/bench_output_error.py``). The blocks write into
+numpy arrays through CasADi's buffer interface (converting each block's result from a
+CasADi matrix cost as much as computing it).
 """
 from __future__ import annotations
 
@@ -20,20 +27,34 @@ from ...hybrid.casadi_form import (
     rk4_step,
     stage_columns,
 )
+from ...hybrid.codegen import compiled
 
 #: steps per differentiated block
 BLOCK = 256
+#: sample intervals (over all records) from which the blocks are compiled: compiling takes
+#: about a second, which the virtual machine spends on a few thousand sensitivity steps
+COMPILE_STEPS = 5000
 
 
 @dataclass
 class Sensitivities:
     """States ``(m, n)`` at the samples (row 0 is ``x0``) and their derivatives:
-    ``d_x0`` ``(m, n, n)`` with respect to ``x0`` and ``d_coef`` ``(m, n, n p)`` with
-    respect to the coefficients (flattened row-major: ``Ξ[i, j]`` is column ``i p + j``)."""
+    ``d_x0`` ``(m, n, n)`` with respect to ``x0`` and ``d_coef`` ``(m, n, c)`` with
+    respect to the free coefficients ``columns`` ``(c,)`` (indices into the row-major
+    flattened ``Ξ``: ``Ξ[i, j]`` is ``i p + j``)."""
 
     states: np.ndarray
     d_x0: np.ndarray
     d_coef: np.ndarray
+    columns: np.ndarray
+
+    def d_coefficients(self, index) -> np.ndarray:
+        """``d_coef`` for the flattened coefficient indices ``index`` (all free)."""
+        position = np.searchsorted(self.columns, index)
+        if np.any(position >= len(self.columns)) or \
+                np.any(self.columns[np.minimum(position, len(self.columns) - 1)] != index):
+            raise ValueError("sensitivities were asked for coefficients that are not free")
+        return self.d_coef[:, :, position]
 
 
 class ShootingModel:
@@ -43,9 +64,13 @@ class ShootingModel:
         setup: a :class:`~discrepancy.fitting.setup.FitSetup` (names, prior, library).
         substeps: RK4 steps per sample interval.
         check_points: ``(states, inputs)`` on which a traced callable prior is checked.
+        free: ``(n, p)`` bool, the coefficients that get sensitivities (default all).
+        compile: compile the blocks to C (warns and runs them uncompiled without a C
+            compiler).
     """
 
-    def __init__(self, setup, substeps: int, *, check_points=None):
+    def __init__(self, setup, substeps: int, *, check_points=None, free=None,
+                 compile: bool = False):
         ca = casadi_module()
         n, r = setup.n_states, setup.n_inputs
         p = setup.n_features
@@ -62,8 +87,13 @@ class ShootingModel:
         self._prior_uses = _uses(ca.jacobian(prior, x))       # (n, n): f_m,j uses x_i
         self._term_uses = _uses(ca.jacobian(theta, x))        # (p, n): θ_k uses x_i
         step = rk4_step(f, n, r, substeps, n_parameters=n * p)
-        self._plain = step.mapaccum("plain", BLOCK)
-        self._augmented = _sensitivity_step(step, n, n * p).mapaccum("sensitive", BLOCK)
+        free = np.ones((n, p), bool) if free is None else np.asarray(free, bool)
+        self.free = np.flatnonzero(free.ravel())
+        plain = step.mapaccum("shooting_plain", BLOCK)
+        augmented = _sensitivity_step(step, n, self.free).mapaccum("shooting_sensitive",
+                                                                    BLOCK)
+        self._plain = _Blocks(compiled(plain, enabled=compile))
+        self._augmented = _Blocks(compiled(augmented, enabled=compile))
 
     def _blocks(self, stages, h):
         """Padded stage columns and step lengths, ``BLOCK`` steps at a time (steps of
@@ -78,15 +108,15 @@ class ShootingModel:
         for i in range(0, padded, BLOCK):
             yield i, cols[:, i:i + BLOCK], lengths[:, i:i + BLOCK]
 
-    def _run(self, function, start, stages, h, coef) -> np.ndarray:
-        """The accumulated state of ``function`` at every sample ``(len(h) + 1, width)``."""
+    def _run(self, blocks, start, stages, h, coef) -> np.ndarray:
+        """The accumulated state of ``blocks`` at every sample ``(len(h) + 1, width)``."""
         k, c = len(h), np.asarray(coef, dtype=float).ravel()
         out = np.empty((k + 1 + BLOCK, len(start)))
         out[0] = state = start
         for i, cols, lengths in self._blocks(stages, h):
-            block = np.asarray(function(state, cols, lengths, c))
+            block = blocks(state, cols, lengths, c)
             out[i + 1:i + 1 + BLOCK] = block.T
-            state = block[:, -1]
+            state = block[:, -1].copy()
         return out[:k + 1]
 
     def simulate(self, x0, stages, h, coef) -> np.ndarray:
@@ -95,14 +125,14 @@ class ShootingModel:
 
     def sensitivities(self, x0, stages, h, coef) -> Sensitivities:
         """States and their derivatives (see :class:`Sensitivities`)."""
-        n, npar = self.n, self.n * self.p
+        n, npar = self.n, len(self.free)
         start = np.concatenate([np.asarray(x0, dtype=float), np.eye(n).ravel(order="F"),
                                 np.zeros(n * npar)])
         out = self._run(self._augmented, start, stages, h, coef)
         m = len(out)
         d_x0 = out[:, n:n + n * n].reshape(m, n, n, order="F")
         d_coef = out[:, n + n * n:].reshape(m, n, npar, order="F")
-        return Sensitivities(out[:, :n], d_x0, d_coef)
+        return Sensitivities(out[:, :n], d_x0, d_coef, self.free)
 
     def influences(self, allowed: np.ndarray) -> np.ndarray:
         """``(n, n)`` bool: ``[j, i]`` when the equation of state ``j`` can depend on state
@@ -115,20 +145,50 @@ class ShootingModel:
         return np.asarray(self.library_function.map(len(states))(states.T, u.T)).T
 
 
-def _sensitivity_step(step, n: int, n_parameters: int):
+class _Blocks:
+    """A block function called through CasADi's buffer interface on numpy arrays (each
+    input broadcast to its declared shape; the result ``(width, BLOCK)`` is a view of a
+    buffer the next call overwrites: copy what you keep)."""
+
+    def __init__(self, function):
+        self.function = function
+        self._buffer, self._evaluate = function.buffer()
+        self._shapes = [(function.size1_in(i), function.size2_in(i))
+                        for i in range(function.n_in())]
+        self._args = [None] * function.n_in()
+        self._result = np.zeros(function.size1_out(0) * function.size2_out(0))
+        self._buffer.set_res(0, memoryview(self._result))
+        self._shape = (function.size2_out(0), function.size1_out(0))
+
+    def __call__(self, *args) -> np.ndarray:
+        for i, (a, shape) in enumerate(zip(args, self._shapes, strict=True)):
+            a = np.asarray(a, dtype=float)
+            a = a.reshape(-1, 1) if a.ndim < 2 else a
+            # a fresh column-major copy: CasADi reads it while it writes the result
+            self._args[i] = np.array(np.broadcast_to(a, shape), order="F").ravel(order="K")
+            self._buffer.set_arg(i, memoryview(self._args[i]))
+        self._evaluate()
+        return self._result.reshape(self._shape).T
+
+
+def _sensitivity_step(step, n: int, free: np.ndarray):
     """One step of the state and its forward sensitivities, as one augmented state
     ``[x, vec(S_x0), vec(S_coef)]`` (column-major): ``S' = A S (+ B)`` with ``A = ∂step/∂x``
-    and ``B = ∂step/∂coef``, differentiated symbolically once for the step."""
+    and ``B = ∂step/∂coef`` for the ``free`` coefficients only, differentiated symbolically
+    once for the step."""
     ca = casadi_module()
-    width = n + n * n + n * n_parameters
+    n_parameters = step.size1_in(3)
+    width = n + n * n + n * len(free)
     z = ca.SX.sym("z", width)
     cols = ca.SX.sym("U", step.size1_in(1))
     h, c = ca.SX.sym("h"), ca.SX.sym("c", n_parameters)
     x = z[:n]
     s_x = ca.reshape(z[n:n + n * n], n, n)
-    s_c = ca.reshape(z[n + n * n:], n, n_parameters)
+    s_c = ca.reshape(z[n + n * n:], n, len(free))
     nxt = step(x, cols, h, c)
-    a, b = ca.jacobian(nxt, x), ca.jacobian(nxt, c)
+    a = ca.jacobian(nxt, x)
+    b = ca.jacobian(nxt, ca.vertcat(*[c[int(i)] for i in free])) if len(free) \
+        else ca.SX(n, 0)
     out = ca.vertcat(nxt, ca.vec(ca.mtimes(a, s_x)), ca.vec(ca.mtimes(a, s_c) + b))
     return ca.Function("sensitive_step", [z, cols, h, c], [out])
 
