@@ -128,6 +128,12 @@ class NameConventionWarning(UserWarning):
     0-based names (``x1`` is the first state here, the second in PySINDy)."""
 
 
+class InitialStateWarning(UserWarning):
+    """Even the best of several starts fits the measured outputs poorly: the estimated
+    initial state (and a simulation from it) should not be trusted. The message gives the
+    RMS error relative to the outputs' spread."""
+
+
 class CoarseSamplingWarning(UserWarning):
     """The data have too few samples per period for the chosen differentiation method."""
 

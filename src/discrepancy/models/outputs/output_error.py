@@ -188,6 +188,11 @@ class OutputErrorFit:
         return [self.out_map(self.shooting.simulate(x0, r.stages, r.h, coef))
                 for x0, r in zip(x0s, self.records, strict=True)]
 
+    def record_errors(self, coef, x0s) -> np.ndarray:
+        """RMS output error of each record ``(records, k)`` in the outputs' units."""
+        return np.array([np.sqrt(np.mean((sim - r.y) ** 2, axis=0)) for sim, r in
+                         zip(self.simulate_outputs(coef, x0s), self.records, strict=True)])
+
     def error(self, coef, x0s, rows) -> float:
         """RMS of the scaled output error on the given rows of every record."""
         return float(np.sqrt(self.squared_errors(coef, x0s, rows)[0]))

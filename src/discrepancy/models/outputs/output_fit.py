@@ -10,6 +10,7 @@ from ...constraints import Integral, Interval, Real, check_argument
 from ...errors import ParameterError, ShapeError
 from ...hybrid.outputs import OutputMap
 from ...optimizers.selection import one_standard_error
+from .initial_states import best_start, candidates, warn_if_poor
 from .output_error import (
     NEGLIGIBLE,
     RIDGE,
@@ -253,3 +254,18 @@ def sandwich_uncertainty(model, covariance, dof: int, *, draws: int = 1000, seed
     samples = samples.reshape(draws, n, p) * (model.coef_ != 0)
     return CoefficientUncertainty(model.coef_.copy(), samples, list(model.state_names_),
                                   model.get_feature_names(), 0)
+
+
+def estimate_initial_states(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps):
+    """Initial states ``(records, n)`` of a fitted model's records, its coefficients held:
+    fitted from several starts (:func:`~.initial_states.candidates`), the best kept per
+    record, with :class:`~discrepancy.errors.InitialStateWarning` when even that fits
+    poorly."""
+    records, _ = records_of(model, y, t, u, substeps, u_hold)
+    fit, guess, everything = prepare(model.setup_, records, outputs=outputs, x0=x0,
+                                     x0_bounds=x0_bounds, substeps=substeps,
+                                     free=np.zeros_like(model.coef_, bool))
+    starts = candidates(fit, model.coef_, given=None if x0 is None else guess)
+    x0s, labels, rms = best_start(fit, model.coef_, everything, starts)
+    warn_if_poor(rms, labels, fit.y_scale, len(starts))
+    return x0s

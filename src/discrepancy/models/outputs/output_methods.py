@@ -113,17 +113,22 @@ class OutputErrorMethods:
                                x0_bounds=None, u_hold: str = "linear", substeps: int = 4):
         """The initial state ``(n,)`` (a list for a list of records) that makes the fitted
         model's simulation best match measured outputs (e.g. the first samples of a test
-        record); the model is unchanged.
+        record); the model is unchanged. The state is fitted from several starts (``x0``
+        when given, the measured states with the others at 0, the unmeasured ones at either
+        sign of the outputs' size, solutions of ``h(x) = y[0]`` for an output map, the
+        model's steady state with the first input) and the best fit kept per record; when
+        even that fits the outputs with an RMS error above a quarter of their spread,
+        :class:`~discrepancy.errors.InitialStateWarning` says how poorly.
 
         Args:{common}
         """
         keywords_only("estimate_initial_state", args, "u, outputs and the options")
         self.check_is_fitted()
         self._refuse_maps("estimate_initial_state")
-        from .output_fit import refit_outputs
+        from .output_fit import estimate_initial_states
 
-        _, x0s, _ = refit_outputs(self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds,
-                                  u_hold=u_hold, substeps=substeps, coefficients=False)
+        x0s = estimate_initial_states(self, y, t, u, outputs=outputs, x0=x0,
+                                      x0_bounds=x0_bounds, u_hold=u_hold, substeps=substeps)
         return list(x0s) if isinstance(y, (list, tuple)) else x0s[0]
 
     def _refuse_maps(self, method: str) -> None:

@@ -82,6 +82,8 @@ class ShootingModel:
         rhs = prior_expression(setup.prior, x, u, check_points=check_points) + \
             ca.mtimes(xi, theta)
         f = ca.Function("f", [x, u, coef], [rhs])
+        self._rhs_jacobian = ca.Function("f_and_jacobian", [x, u, coef],
+                                         [rhs, ca.jacobian(rhs, x)])
         self.library_function = ca.Function("theta", [x, u], [theta])
         prior = rhs - ca.mtimes(xi, theta)
         self._prior_uses = _uses(ca.jacobian(prior, x))       # (n, n): f_m,j uses x_i
@@ -133,6 +135,19 @@ class ShootingModel:
         d_x0 = out[:, n:n + n * n].reshape(m, n, n, order="F")
         d_coef = out[:, n + n * n:].reshape(m, n, npar, order="F")
         return Sensitivities(out[:, :n], d_x0, d_coef, self.free)
+
+    def rhs_and_jacobian(self, u, coef):
+        """``(f, dfdx)``: numpy callables of the state ``(n,)`` giving the model's
+        derivative ``(n,)`` and its Jacobian ``(n, n)`` at input ``u`` ``(r,)``."""
+        c = np.asarray(coef, dtype=float).ravel()
+
+        def f(x):
+            return np.asarray(self._rhs_jacobian(x, u, c)[0]).ravel()
+
+        def dfdx(x):
+            return np.asarray(self._rhs_jacobian(x, u, c)[1])
+
+        return f, dfdx
 
     def influences(self, allowed: np.ndarray) -> np.ndarray:
         """``(n, n)`` bool: ``[j, i]`` when the equation of state ``j`` can depend on state
