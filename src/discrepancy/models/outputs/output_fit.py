@@ -23,7 +23,7 @@ from .output_error import (
     warn_if_not_converged,
 )
 from .output_error import x0_bounds as bounds_of
-from .shooting import COMPILE_STEPS, ShootingModel
+from .shooting import ShootingModel, worth_compiling
 
 #: simulations allowed per support on the path (the final refit may use more)
 PATH_EVALUATIONS = 200
@@ -66,10 +66,10 @@ def prepare(setup, records, *, outputs, x0, x0_bounds, substeps, free=None):
     x0s = initial_states(x0, records, out_map, setup.n_states)
     points = (x0s, None if not r else np.repeat(records[0].u[:1], len(x0s), axis=0))
     allowed = _allowed(setup)
-    steps = sum(rec.m - 1 for rec in records)
-    shooting = ShootingModel(setup, substeps, check_points=points,
-                             free=allowed if free is None else free,
-                             compile=steps >= COMPILE_STEPS)
+    free = allowed if free is None else free
+    shooting = ShootingModel(setup, substeps, check_points=points, free=free,
+                             compile=worth_compiling(sum(rec.m - 1 for rec in records),
+                                                     setup.n_states, int(free.sum())))
     fit = OutputErrorFit(setup, records, out_map, shooting, allowed)
     fit.bounds = bounds_of(x0_bounds, setup.n_states)
     check_identifiable(fit)

@@ -7,12 +7,13 @@ the state to the initial state and to every coefficient ride along as extra stat
 sensitivities of the discrete map, exact), ``BLOCK`` steps per compiled call, so the cost
 grows linearly with the record and CasADi never builds a graph as long as the record.
 
-Only the coefficients a fit may change (``free``) get sensitivities, and on long records
-both block functions are compiled to C (:func:`~discrepancy.hybrid.codegen.compiled`, cached
-by source): the same operations in the same order, so the same numbers as CasADi's virtual
-machine, about six times faster (``benchmarks/bench_output_error.py``). The blocks write into
-numpy arrays through CasADi's buffer interface (converting each block's result from a
-CasADi matrix cost as much as computing it).
+Only the coefficients a fit may change (``free``) get sensitivities, and when the work is
+large (:func:`worth_compiling`) both block functions are compiled to C
+(:func:`~discrepancy.hybrid.codegen.compiled`, cached by source): the same operations in the
+same order, so the same numbers as CasADi's virtual machine, about six times faster
+(``benchmarks/bench_output_error.py``). The blocks write into numpy arrays through CasADi's
+buffer interface (converting each block's result from a CasADi matrix cost as much as
+computing it).
 """
 from __future__ import annotations
 
@@ -31,9 +32,19 @@ from ...hybrid.codegen import compiled
 
 #: steps per differentiated block
 BLOCK = 256
-#: sample intervals (over all records) from which the blocks are compiled: compiling takes
-#: about a second, which the virtual machine spends on a few thousand sensitivity steps
-COMPILE_STEPS = 5000
+#: work (sample intervals over all records times the width of the sensitivity state) from
+#: which the blocks are compiled. Compiling takes about 1 s at width 26 and 40 s at width
+#: 192 (it grows like the square of the width); a fit evaluates the sensitivities tens to
+#: hundreds of times, each costing about a microsecond per interval and width unit in
+#: CasADi's virtual machine and a sixth of that compiled: 25,000 intervals of a two-state
+#: model with 10 free terms (650,000) compile, a short record with a small library does not
+COMPILE_WORK = 100_000
+
+
+def worth_compiling(intervals: int, n: int, n_free: int) -> bool:
+    """Whether a fit of ``intervals`` sample intervals, ``n`` states and ``n_free`` free
+    coefficients should compile its blocks (see :data:`COMPILE_WORK`)."""
+    return intervals * (n + n * n + n * n_free) >= COMPILE_WORK
 
 
 @dataclass
