@@ -1,6 +1,7 @@
 """Initial states from several starts: a rectified output whose sign a start at zero cannot
 find, the best start's state against the simulated truth, and the warning when no start
 fits (a model of the wrong frequency)."""
+import functools
 import warnings
 
 import numpy as np
@@ -18,6 +19,7 @@ pytest.importorskip("casadi")
 POS, VEL, U = sp.symbols("pos vel u", real=True)
 
 
+@functools.lru_cache
 def oscillator(stiffness=1.0, m=800, dt=0.05):
     t = np.arange(m) * dt
     u = np.sin(0.8 * t) + 0.6 * np.sin(1.9 * t + 0.4)
@@ -41,7 +43,7 @@ def test_a_rectified_output_needs_more_than_a_start_at_zero(k):
     branch (pos of the wrong sign; a local minimum, as the input's effect over 0.5 s is
     small); the starts from the inverse of the output map (both signs) include the true
     branch, and the best fit is the true state."""
-    t, u, x = oscillator(m=800)
+    t, u, x = oscillator()
     window = slice(k, k + 10)
     y = np.abs(x[window, 0])
     model = exact_model(t, u, x)
