@@ -126,6 +126,9 @@ CASES = [
     Case("metrics", "rms_error shapes differ", lambda: metrics.rms_error([1, 2, 3], [1, 2]), raises(ShapeError, r"measured and predicted must have the same shape")),
     Case("metrics", "nrmse of a text", lambda: metrics.nrmse("abc", [1, 2, 3]), raises(ShapeError, r"measured must be a numeric array")),
     Case("metrics", "nrmse NaN in predicted", lambda: metrics.nrmse([1, 2, 3], [1, NAN, 3]), raises(DataError, r"predicted must be finite")),
+    Case("metrics", "nrmse of a constant signal", lambda: metrics.nrmse([2.0, 2.0, 2.0], [2.0, 2.1, 2.0]), raises(DataError, r"measured column\(s\) \[0\] are constant, so nrmse")),
+    Case("metrics", "fit_percent of a constant second column", lambda: metrics.fit_percent([[1.0, 5.0], [2.0, 5.0]], [[1.0, 5.0], [2.0, 5.0]]), raises(DataError, r"column\(s\) \[1\] are constant, so fit_percent")),
+    Case("metrics", "rms_error of no samples", lambda: metrics.rms_error([], []), raises(DataError, r"at least one sample; got none")),
     Case("metrics", "fit_percent perfect", lambda: metrics.fit_percent([1.0, 2.0, 4.0], [1.0, 2.0, 4.0]), returns(equal(100.0))),
     Case("metrics", "fit_percent inf", lambda: metrics.fit_percent([1, np.inf, 3], [1, 2, 3]), raises(DataError, r"measured must be finite")),
     # symbolic

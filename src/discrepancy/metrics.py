@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .data.validation import check_array
-from .errors import ShapeError
+from .errors import DataError, ShapeError
 
 
 def _pair(measured, predicted):
@@ -19,7 +19,20 @@ def _pair(measured, predicted):
     if y.shape != y_hat.shape:
         raise ShapeError(f"measured and predicted must have the same shape; got {y.shape} "
                          f"and {y_hat.shape}")
+    if y.shape[0] == 0:
+        raise DataError("measured and predicted must hold at least one sample; got none")
     return y, y_hat
+
+
+def _spread(y, size, what: str) -> np.ndarray:
+    """``size`` ``(k,)`` of each measured column, refused where it is zero (a constant
+    signal: the normalised figure is undefined, not huge)."""
+    flat = np.flatnonzero(size == 0)
+    if flat.size:
+        raise DataError(f"measured column(s) {flat.tolist()} are constant, so {what} (which "
+                        "divides by the measured signal's spread) is undefined; use "
+                        "rms_error")
+    return size
 
 
 def rms_error(measured, predicted) -> np.ndarray | float:
@@ -32,13 +45,13 @@ def rms_error(measured, predicted) -> np.ndarray | float:
 def nrmse(measured, predicted) -> np.ndarray | float:
     """RMS error over the standard deviation of ``measured``, per column."""
     y, y_hat = _pair(measured, predicted)
-    out = np.sqrt(np.mean((y_hat - y) ** 2, axis=0)) / np.maximum(y.std(axis=0), 1e-300)
+    out = np.sqrt(np.mean((y_hat - y) ** 2, axis=0)) / _spread(y, y.std(axis=0), "nrmse")
     return float(out[0]) if out.size == 1 else out
 
 
 def fit_percent(measured, predicted) -> np.ndarray | float:
     """``100 (1 - |y - ŷ| / |y - mean(y)|)`` per column."""
     y, y_hat = _pair(measured, predicted)
-    spread = np.maximum(np.linalg.norm(y - y.mean(axis=0), axis=0), 1e-300)
+    spread = _spread(y, np.linalg.norm(y - y.mean(axis=0), axis=0), "fit_percent")
     out = 100 * (1 - np.linalg.norm(y - y_hat, axis=0) / spread)
     return float(out[0]) if out.size == 1 else out
