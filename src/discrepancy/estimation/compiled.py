@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..hybrid.codegen import BufferedFunction
 from . import kalman_math as km
 from .backends import CasadiOps
 
@@ -83,10 +84,10 @@ class CompiledSteps:
             alone = km.ukf_predict(ops, x, P, U, h, ca.DM(Q), substeps,
                                    dynamics.discrete_time, weights)
             update = km.ukf_update(ops, x, P, sym["y"], sym["w"], ca.DM(R), weights)
-        self.predict = fast_call(ca, ca.Function(
+        self.predict = fast_call(ca.Function(
             "predict", [ca.vertcat(x, ca.vec(P), U, h)],
             [ca.densify(ca.vertcat(alone[0], ca.vec(alone[1]), ca.vec(alone[2])))]))
-        self.update = fast_call(ca, ca.Function(
+        self.update = fast_call(ca.Function(
             "update", [ca.vertcat(x, ca.vec(P), sym["y"], sym["w"])],
             [ca.densify(flat_update(ca, update))]))
         xp, Pp, C = sym["predict"]
@@ -101,22 +102,16 @@ class CompiledSteps:
                           layout(self.n, self.k, self.r, self.substeps)["out"])
 
 
-def fast_call(ca, function):
-    """``call(flat (in,)) -> (out,)`` through CasADi's buffer interface: the arrays are
-    bound once, so a call costs about a microsecond of overhead instead of the tens of a
-    ``Function.__call__`` (which converts its arguments each time). Not thread-safe: one
-    filter object per thread."""
-    buffer, evaluate = function.buffer()
-    arg, res = np.zeros(function.nnz_in(0)), np.zeros(function.nnz_out(0))
-    buffer.set_arg(0, memoryview(arg))
-    buffer.set_res(0, memoryview(res))
+def fast_call(function):
+    """``call(flat (in,)) -> (out,)``: ``function`` (one input, one output, both columns)
+    through CasADi's buffer interface (:class:`~discrepancy.hybrid.codegen.BufferedFunction`),
+    the result copied. Not thread-safe: one filter object per thread."""
+    buffered = BufferedFunction(function)
 
     def call(values):
-        arg[:] = values
-        evaluate()
-        return res.copy()
+        return buffered(values)[:, 0].copy()
 
-    call.keep = (function, buffer, evaluate, arg, res)   # the buffer must outlive its calls
+    call.keep = buffered
     return call
 
 

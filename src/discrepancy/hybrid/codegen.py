@@ -20,6 +20,8 @@ import tempfile
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from ..constraints import check_argument
 from ..errors import CompilationWarning
 from .casadi_form import casadi_module
@@ -95,3 +97,33 @@ def _compile(source: Path, library: Path) -> None:
     finally:
         if os.path.exists(partial):
             os.unlink(partial)
+
+
+class BufferedFunction:
+    """A CasADi Function called on numpy arrays through its buffer interface: its inputs and
+    first output are bound once to preallocated arrays, so a call costs about a microsecond
+    of overhead instead of the tens a ``Function.__call__`` spends converting its arguments
+    (for the output-error blocks, converting each result cost as much as computing it).
+
+    ``call(*args)`` copies each argument into its input (broadcast to the declared shape;
+    a view of the previous result is fine, it is copied first) and returns the first output
+    ``(size1, size2)`` as a view of a buffer the next call overwrites: copy what you keep.
+    Not thread-safe: one object per thread. Dense inputs and outputs only."""
+
+    def __init__(self, function):
+        self.function = function
+        self._buffer, self._evaluate = function.buffer()
+        self._args = [np.zeros((function.size1_in(i), function.size2_in(i)), order="F")
+                      for i in range(function.n_in())]
+        for i, arg in enumerate(self._args):
+            self._buffer.set_arg(i, memoryview(arg.ravel(order="K")))
+        self._result = np.zeros(function.nnz_out(0))
+        self._buffer.set_res(0, memoryview(self._result))
+        self._shape = (function.size2_out(0), function.size1_out(0))
+
+    def __call__(self, *args) -> np.ndarray:
+        for arg, value in zip(self._args, args, strict=True):
+            value = np.asarray(value, dtype=float)
+            arg[...] = value.reshape(-1, 1) if value.ndim < 2 else value   # a column
+        self._evaluate()
+        return self._result.reshape(self._shape).T

@@ -28,7 +28,7 @@ from ...hybrid.casadi_form import (
     rk4_step,
     stage_columns,
 )
-from ...hybrid.codegen import compiled
+from ...hybrid.codegen import BufferedFunction, compiled
 
 #: steps per differentiated block
 BLOCK = 256
@@ -105,8 +105,8 @@ class ShootingModel:
         plain = step.mapaccum("shooting_plain", BLOCK)
         augmented = _sensitivity_step(step, n, self.free).mapaccum("shooting_sensitive",
                                                                     BLOCK)
-        self._plain = _Blocks(compiled(plain, enabled=compile))
-        self._augmented = _Blocks(compiled(augmented, enabled=compile))
+        self._plain = BufferedFunction(compiled(plain, enabled=compile))
+        self._augmented = BufferedFunction(compiled(augmented, enabled=compile))
 
     def _blocks(self, stages, h):
         """Padded stage columns and step lengths, ``BLOCK`` steps at a time (steps of
@@ -169,32 +169,6 @@ class ShootingModel:
         """Library columns ``(m, p)`` along a trajectory (for scaling the coefficients)."""
         u = np.zeros((len(states), 0)) if inputs is None else inputs
         return np.asarray(self.library_function.map(len(states))(states.T, u.T)).T
-
-
-class _Blocks:
-    """A block function called through CasADi's buffer interface on numpy arrays (each
-    input broadcast to its declared shape; the result ``(width, BLOCK)`` is a view of a
-    buffer the next call overwrites: copy what you keep)."""
-
-    def __init__(self, function):
-        self.function = function
-        self._buffer, self._evaluate = function.buffer()
-        self._shapes = [(function.size1_in(i), function.size2_in(i))
-                        for i in range(function.n_in())]
-        self._args = [None] * function.n_in()
-        self._result = np.zeros(function.size1_out(0) * function.size2_out(0))
-        self._buffer.set_res(0, memoryview(self._result))
-        self._shape = (function.size2_out(0), function.size1_out(0))
-
-    def __call__(self, *args) -> np.ndarray:
-        for i, (a, shape) in enumerate(zip(args, self._shapes, strict=True)):
-            a = np.asarray(a, dtype=float)
-            a = a.reshape(-1, 1) if a.ndim < 2 else a
-            # a fresh column-major copy: CasADi reads it while it writes the result
-            self._args[i] = np.array(np.broadcast_to(a, shape), order="F").ravel(order="K")
-            self._buffer.set_arg(i, memoryview(self._args[i]))
-        self._evaluate()
-        return self._result.reshape(self._shape).T
 
 
 def _sensitivity_step(step, n: int, free: np.ndarray):
