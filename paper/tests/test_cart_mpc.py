@@ -76,7 +76,9 @@ def test_cart_output_feedback_and_the_smoothed_logs_give_the_exact_terms(cart):
         assert ident["spurious_terms"] == ident["missing_terms"] == 0, route
         assert ident["exact_terms_learned"]["sin(phi1) in (phi1)'"] == pytest.approx(-1.0, rel=0.01)
         assert ident["exact_terms_learned"]["u in (ds)'"] == pytest.approx(0.05, rel=0.05)
-    assert head[f"output_feedback_successes_of_{n}"] >= n - 1
+    # every quick plant: with 4 plants all 4 succeeded (cart within 0.490 m of the 0.501 m
+    # allowed, final angle errors below 0.007 rad of the 0.05 rad allowed)
+    assert head[f"output_feedback_successes_of_{n}"] == n == 2
     assert res["nominal_runs"]["hybrid + MPC, output feedback"]["success"]
     rms = head["estimator_rms_error_mean_over_plants"]
     assert rms["dphi1"] < 0.05 and rms["phi1"] < 0.005   # sensor noise: 0.02 rad/s, 1 mrad
