@@ -19,7 +19,8 @@ def test_cart_mpc_writes_its_figures_and_animation(cart):
                  "leaderboard.png", "estimation.png"]:
         assert (out / name).stat().st_size > 1000, name
     with Image.open(out / "mpc_swingup.gif") as gif:
-        assert gif.n_frames > 60   # 4 s at 20 frames per second
+        # the whole run (2.7 s swing-up + 1.3 s balancing) at the quick GIF's 10 frames/s
+        assert gif.n_frames * gif.info["duration"] >= 4000
     assert res["settings"]["rail_m"] == 0.5 and res["experiment"] == "cart-mpc"
 
 
@@ -76,7 +77,9 @@ def test_cart_output_feedback_and_the_smoothed_logs_give_the_exact_terms(cart):
         assert ident["spurious_terms"] == ident["missing_terms"] == 0, route
         assert ident["exact_terms_learned"]["sin(phi1) in (phi1)'"] == pytest.approx(-1.0, rel=0.01)
         assert ident["exact_terms_learned"]["u in (ds)'"] == pytest.approx(0.05, rel=0.05)
-    assert head[f"output_feedback_successes_of_{n}"] >= n - 1
+    # every quick plant: with 4 plants all 4 succeeded (cart within 0.490 m of the 0.501 m
+    # allowed, final angle errors below 0.007 rad of the 0.05 rad allowed)
+    assert head[f"output_feedback_successes_of_{n}"] == n == 2
     assert res["nominal_runs"]["hybrid + MPC, output feedback"]["success"]
     rms = head["estimator_rms_error_mean_over_plants"]
     assert rms["dphi1"] < 0.05 and rms["phi1"] < 0.005   # sensor noise: 0.02 rad/s, 1 mrad

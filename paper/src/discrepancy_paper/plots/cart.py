@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.animation import FuncAnimation, PillowWriter
 from matplotlib.patches import Rectangle
+from PIL import Image
 
 CART_W, CART_H = 0.10, 0.05
 
@@ -112,7 +112,11 @@ def robustness_figure(final_errors: dict, success: dict, *, angle_tol=0.05):
 
 def swingup_gif(path, runs: dict, points, *, fps=20, rail=0.5, dpi=72):
     """Animated GIF of several runs side by side; ``runs = {label: (t, x)}`` sharing ``t``.
-    Dotted red lines: the rail's ends; the panel is ±(rail + 0.15) m wide or wider."""
+    Dotted red lines: the rail's ends; the panel is ±(rail + 0.15) m wide or wider.
+
+    Each frame is drawn once and handed to Pillow, as matplotlib's ``PillowWriter`` does;
+    ``FuncAnimation.save`` would draw every frame twice (once at the screen's dpi, once at
+    ``dpi``): the same GIF at about half the CPU time (measured on the cart-mpc GIF)."""
     labels = list(runs)
     t = runs[labels[0]][0]
     frames = np.unique(np.searchsorted(t, np.arange(0.0, t[-1] + 1e-9, 1.0 / fps)).clip(0,
@@ -147,7 +151,15 @@ def swingup_gif(path, runs: dict, points, *, fps=20, rail=0.5, dpi=72):
             clock.set_text(f"t = {t[j]:.2f} s")
         return []
 
-    anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)
-    anim.save(path, writer=PillowWriter(fps=fps), dpi=dpi)
+    fig.set_dpi(dpi)
+    images = []
+    for i in range(len(frames)):
+        draw(i)
+        fig.canvas.draw()
+        images.append(Image.frombuffer("RGBA", fig.canvas.get_width_height(),
+                                       fig.canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+                      .convert("RGB"))
     plt.close(fig)
+    images[0].save(path, save_all=True, append_images=images[1:], duration=int(1000 / fps),
+                   loop=0)
     return path
