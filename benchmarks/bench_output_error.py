@@ -165,8 +165,7 @@ def against_scipy(t, u, y, coulomb, support):
 def main(argv):
     samples = int(argv[argv.index("--samples") + 1]) if "--samples" in argv else 25_000
     print(f"## Output error: {samples} samples, velocity unmeasured, degree-3 library\n")
-    print(machine())
-    print(f"load average at the start: {os.getloadavg()[0]:.1f}\n")
+    print(machine() + "\n")
     rows, peer_rows = [], []
     with tempfile.TemporaryDirectory() as work:
         work = Path(work)

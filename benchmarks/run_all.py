@@ -16,7 +16,7 @@ from pathlib import Path
 
 HERE = Path(__file__).parent
 BENCHES = ["bench_fit", "bench_simulate", "bench_streaming", "bench_dask", "bench_dequantise",
-           "bench_block_fit", "bench_mpc", "bench_estimation",
+           "bench_block_fit", "bench_mpc", "bench_estimation", "bench_output_error",
            "bench_energy_blind", "bench_pde"]
 BIG = {"bench_streaming", "bench_dask", "bench_pde"}
 
