@@ -134,11 +134,11 @@ for _i, _code in enumerate(_rows):
     signal.setitimer(signal.ITIMER_PROF, {seconds})
     signal.alarm(4 * {seconds})
     try:
-        sys.setprofile(_hook)
+        sys.settrace(_hook)
         try:
             _value = eval(compile(_code, f"row {{_i}}", "eval"))
         finally:
-            sys.setprofile(None)
+            sys.settrace(None)
         _out = {{"kind": None, "value": repr(_value)[:300]}}
     except _Late:
         _out = {{"kind": "Timeout", "message": "no answer in {seconds} s of CPU time"}}
