@@ -13,7 +13,10 @@ entry point as its docstring says.
 """
 from __future__ import annotations
 
+import fcntl
+import hashlib
 import json
+import os
 import re
 import subprocess
 import sys
@@ -134,11 +137,11 @@ for _i, _code in enumerate(_rows):
     signal.setitimer(signal.ITIMER_PROF, {seconds})
     signal.alarm(4 * {seconds})
     try:
-        sys.setprofile(_hook)
+        sys.settrace(_hook)
         try:
             _value = eval(compile(_code, f"row {{_i}}", "eval"))
         finally:
-            sys.setprofile(None)
+            sys.settrace(None)
         _out = {{"kind": None, "value": repr(_value)[:300]}}
     except _Late:
         _out = {{"kind": "Timeout", "message": "no answer in {seconds} s of CPU time"}}
@@ -170,6 +173,28 @@ def run_isolated(prelude: str, cases: list[Case], *, cwd) -> dict[str, dict]:
     if len(lines) < len(cases):
         results["__died__"] = {"stderr": proc.stderr[-2000:]}
     return results
+
+
+_RESULTS: dict[str, dict] = {}
+
+
+def run_isolated_once(prelude: str, cases: list[Case], *, cwd, tmp_path_factory) -> dict:
+    """:func:`run_isolated` once per test run for the same rows: kept in this process and,
+    under pytest-xdist, shared by the workers through a file in the run's common temporary
+    directory (the first worker to ask runs the child while holding a lock, another waits
+    and reads), so the isolated table and the reach test do not both pay for the child."""
+    key = hashlib.sha256(json.dumps([prelude, [c.call for c in cases]]).encode()).hexdigest()
+    if key not in _RESULTS:
+        if os.environ.get("PYTEST_XDIST_WORKER"):
+            shared = tmp_path_factory.getbasetemp().parent / f"isolated-{key[:16]}.json"
+            with open(shared.with_suffix(".lock"), "w") as lock:
+                fcntl.flock(lock, fcntl.LOCK_EX)
+                if not shared.exists():
+                    shared.write_text(json.dumps(run_isolated(prelude, cases, cwd=cwd)))
+                _RESULTS[key] = json.loads(shared.read_text())
+        else:
+            _RESULTS[key] = run_isolated(prelude, cases, cwd=cwd)
+    return _RESULTS[key]
 
 
 def check_isolated(case: Case, results: dict) -> None:

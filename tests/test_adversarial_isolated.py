@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from adversarial import Case, check_isolated, params, raises, returns, run_isolated
+from adversarial import Case, check_isolated, params, raises, returns, run_isolated_once
 from discrepancy.errors import (
     DataError,
     FeatureError,
@@ -125,7 +125,8 @@ CASES = [
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
-    return run_isolated(PRELUDE, CASES, cwd=tmp_path_factory.mktemp("isolated"))
+    return run_isolated_once(PRELUDE, CASES, cwd=tmp_path_factory.mktemp("isolated"),
+                             tmp_path_factory=tmp_path_factory)
 
 
 @params(CASES)

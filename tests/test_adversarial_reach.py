@@ -1,7 +1,8 @@
 """Every public callable has adversarial rows (see ``adversarial_reach.py``).
 
 The callable a row exercises is recorded as the row runs (``adversarial.REACHED``); rows not
-yet run in this process (this file alone, or another xdist worker ran them) are run here.
+yet run in this process (this file alone, or another xdist worker ran them) are run here;
+the isolated table's child process runs once per test run (``run_isolated_once``).
 ``pytest -s tests/test_adversarial_reach.py`` prints the rows per entry point.
 """
 from __future__ import annotations
@@ -11,12 +12,12 @@ import collections
 import pytest
 
 import adversarial
-from adversarial import check, check_isolated, run_isolated
+from adversarial import check, check_isolated, run_isolated_once
 from adversarial_reach import catalogue
 from test_adversarial_count import TABLES
 
 
-def _reach_all(tmp_path, monkeypatch) -> dict[str, str | None]:
+def _reach_all(tmp_path, tmp_path_factory, monkeypatch) -> dict[str, str | None]:
     monkeypatch.chdir(tmp_path)
     for table in TABLES:
         missing = [case for case in table.CASES if case.id not in adversarial.REACHED]
@@ -25,7 +26,8 @@ def _reach_all(tmp_path, monkeypatch) -> dict[str, str | None]:
         if hasattr(table, "prepare"):   # module globals its rows use, set by a fixture
             table.prepare()
         if hasattr(table, "PRELUDE"):   # rows run in a child process
-            results = run_isolated(table.PRELUDE, missing, cwd=tmp_path)
+            results = run_isolated_once(table.PRELUDE, missing, cwd=tmp_path,
+                                        tmp_path_factory=tmp_path_factory)
             runs = [lambda case=case, results=results: check_isolated(case, results)
                     for case in missing]
         else:
@@ -39,8 +41,8 @@ def _reach_all(tmp_path, monkeypatch) -> dict[str, str | None]:
             for case in table.CASES}
 
 
-def test_every_public_callable_has_adversarial_rows(tmp_path, monkeypatch):
-    reached = _reach_all(tmp_path, monkeypatch)
+def test_every_public_callable_has_adversarial_rows(tmp_path, tmp_path_factory, monkeypatch):
+    reached = _reach_all(tmp_path, tmp_path_factory, monkeypatch)
     counts = collections.Counter(name for name in reached.values() if name is not None)
     width = max(map(len, catalogue()))
     print(f"\n| {'entry point':{width}} | rows |\n|{'-' * (width + 2)}|------|")

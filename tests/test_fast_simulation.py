@@ -32,11 +32,13 @@ def linear_prior(x, u):
 
 @pytest.fixture(scope="module")
 def model():
-    """The hybrid model with the Duffing term, fitted on exact derivatives."""
+    """The hybrid model with the Duffing term, fitted on exact derivatives at the sampled
+    states: the coefficients are exact whatever the states' integration error (rtol 1e-8 and
+    1e-11 give the same coefficients to 1e-15), so the states need not be accurate."""
     t = np.arange(4001) * DT
     u = smooth_input(t)[:, None]
     sol = solve_ivp(lambda s, x: duffing(x[None], smooth_input([s])[:, None])[0],
-                    (0, t[-1]), [0.2, 0.0], t_eval=t, rtol=1e-11, atol=1e-11)
+                    (0, t[-1]), [0.2, 0.0], t_eval=t, rtol=1e-8, atol=1e-8)
     x = sol.y.T
     return dc.DiscrepancyModel(prior=linear_prior, feature_library=dc.PolynomialLibrary(3),
                                optimizer=dc.STLSQ(threshold=0.05)).fit(
@@ -67,7 +69,7 @@ def test_bandlimited_reconstruction_recovers_a_bandlimited_signal_between_sample
 
 @pytest.mark.parametrize("hold", ["linear", "zoh", "bandlimited"])
 def test_compiled_steps_equal_python_steps(model, hold):
-    t = np.arange(3001) * DT
+    t = np.arange(1001) * DT
     u = smooth_input(t)[:, None]
     fast = model.simulate([0.3, -0.1], t, u=u, method="rk4", substeps=2, u_hold=hold)
     slow = model.simulate([0.3, -0.1], t, u=u, method="rk4", substeps=2, u_hold=hold,
@@ -79,8 +81,9 @@ def test_bandlimited_input_simulates_the_true_system_best(model):
     """Against the true system driven by the true continuous input: the band-limited hold is
     the most accurate (away from the record's end, where the input's future is unknown)."""
     t = np.arange(2001) * DT
+    # rtol 1e-9: the errors compared are 2.5e-5 and more (the same to 4 digits at 1e-11)
     truth = solve_ivp(lambda s, x: duffing(x[None], smooth_input([s])[:, None])[0],
-                      (0, t[-1]), [0.3, -0.1], t_eval=t, rtol=1e-11, atol=1e-11).y.T
+                      (0, t[-1]), [0.3, -0.1], t_eval=t, rtol=1e-9, atol=1e-9).y.T
     u = smooth_input(t)[:, None]
     errors = {hold: np.abs(model.simulate([0.3, -0.1], t, u=u, method="rk4", substeps=4,
                                           u_hold=hold) - truth)[:1500].max()

@@ -1,5 +1,7 @@
 """Output-error fits judged by held-out forecasts: the prior alone flagged when chosen,
 fitted on purpose, and refine never worse than the model it starts from."""
+import functools
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -18,14 +20,18 @@ def forcing(seed=1, width=20):
     return 2 * np.convolve(rng.standard_normal(len(T)), np.ones(width) / width, mode="same")
 
 
+@functools.cache
 def record(damping, cubic, push=0.0, until=0.0, seed=1):
-    """x'' = -x - damping x' - cubic x^3 + u + push (the push until ``until``, unmeasured)."""
+    """x'' = -x - damping x' - cubic x^3 + u + push (the push until ``until``, unmeasured).
+    Simulated once per set of arguments (several tests share a record), read-only."""
     u = forcing(seed)
     law = lambda s: np.interp(s, T, u) + (push if s < until else 0.0)  # noqa: E731
     x = solve_ivp(lambda s, z: [z[1], -z[0] - damping * z[1] - cubic * z[0] ** 3 + law(s)],
                   (0, T[-1]), [0.5, -0.3], t_eval=T, rtol=1e-11, atol=1e-11,
                   max_step=0.05).y.T
     y = x[:, 0] + 0.005 * np.random.default_rng(seed + 1).standard_normal(len(T))
+    for array in (u, x, y):
+        array.flags.writeable = False
     return u, x, y
 
 
