@@ -100,7 +100,8 @@ class OutputErrorFit:
                 parts.append(((self.out_map(states[fit_rows]) - record.y[fit_rows])
                               / self.y_scale).ravel())
                 continue
-            sens = self.shooting.sensitivities(x0s[i], record.stages, record.h, coef)
+            sens = self.shooting.sensitivities(x0s[i], record.stages, record.h, coef,
+                                               coefficients=len(index) > 0)
             states = sens.states[fit_rows]
             parts.append(((self.out_map(states) - record.y[fit_rows]) / self.y_scale).ravel())
             dh = self.out_map.jacobian(states) / self.y_scale[None, :, None]   # (m, k, n)

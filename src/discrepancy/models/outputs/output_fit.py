@@ -175,7 +175,7 @@ def _path(fit, x0s, max_terms, holdout, tolerance, progress):
     train, test = split_rows(fit.records, holdout)
     zero = np.zeros((fit.n, fit.p))
     prior_x0s = x0s
-    _, _, prior_cost = fit.solve(zero.astype(bool), zero, x0s, train, 0.0)
+    _, prior_train_x0s, prior_cost = fit.solve(zero.astype(bool), zero, x0s, train, 0.0)
     support, coef, x0s = _first_support(fit, x0s, train, max_terms)
     path = []
     bar = tqdm(total=int(support.sum()) + 1, desc="output-error path", unit="support",
@@ -191,7 +191,9 @@ def _path(fit, x0s, max_terms, holdout, tolerance, progress):
         support = smaller
         coef, x0s, cost = fit.solve(support, start, x0s, train, RIDGE,
                                     max_evaluations=PATH_EVALUATIONS)
-        if not cost <= prior_cost:   # lost on the way: start again from the prior alone
+        if not cost <= prior_cost and not support.any():   # the prior alone, solved above
+            coef, x0s = zero.copy(), prior_train_x0s
+        elif not cost <= prior_cost:   # lost on the way: start again from the prior alone
             coef, x0s, _ = fit.solve(support, zero, prior_x0s, train, RIDGE,
                                      max_evaluations=PATH_EVALUATIONS)
     bar.close()

@@ -102,11 +102,20 @@ class ShootingModel:
         step = rk4_step(f, n, r, substeps, n_parameters=n * p)
         free = np.ones((n, p), bool) if free is None else np.asarray(free, bool)
         self.free = np.flatnonzero(free.ravel())
+        self._step, self._compile = step, compile
         plain = step.mapaccum("shooting_plain", BLOCK)
-        augmented = _sensitivity_step(step, n, self.free).mapaccum("shooting_sensitive",
-                                                                    BLOCK)
         self._plain = BufferedFunction(compiled(plain, enabled=compile))
-        self._augmented = BufferedFunction(compiled(augmented, enabled=compile))
+        self._augmented = {}     # by the free coefficients: all of them, or none (x0 only)
+
+    def _sensitive_blocks(self, free: np.ndarray) -> BufferedFunction:
+        """The blocks of the state and its sensitivities to ``x0`` and ``free``, built (and
+        compiled) on first use: fits of initial states alone need no coefficient's."""
+        key = len(free)
+        if key not in self._augmented:
+            step = _sensitivity_step(self._step, self.n, free)
+            blocks = step.mapaccum(f"shooting_sensitive_{key}", BLOCK)
+            self._augmented[key] = BufferedFunction(compiled(blocks, enabled=self._compile))
+        return self._augmented[key]
 
     def _blocks(self, stages, h):
         """Padded stage columns and step lengths, ``BLOCK`` steps at a time (steps of
@@ -136,16 +145,20 @@ class ShootingModel:
         """States ``(len(h) + 1, n)`` from ``x0`` with coefficients ``coef`` ``(n, p)``."""
         return self._run(self._plain, np.asarray(x0, dtype=float), stages, h, coef)
 
-    def sensitivities(self, x0, stages, h, coef) -> Sensitivities:
-        """States and their derivatives (see :class:`Sensitivities`)."""
-        n, npar = self.n, len(self.free)
+    def sensitivities(self, x0, stages, h, coef, *, coefficients: bool = True
+                      ) -> Sensitivities:
+        """States and their derivatives (see :class:`Sensitivities`); without
+        ``coefficients`` only those to ``x0`` (``d_coef`` empty: a quarter of the work
+        for a two-state model with ten free terms)."""
+        free = self.free if coefficients else self.free[:0]
+        n, npar = self.n, len(free)
         start = np.concatenate([np.asarray(x0, dtype=float), np.eye(n).ravel(order="F"),
                                 np.zeros(n * npar)])
-        out = self._run(self._augmented, start, stages, h, coef)
+        out = self._run(self._sensitive_blocks(free), start, stages, h, coef)
         m = len(out)
         d_x0 = out[:, n:n + n * n].reshape(m, n, n, order="F")
         d_coef = out[:, n + n * n:].reshape(m, n, npar, order="F")
-        return Sensitivities(out[:, :n], d_x0, d_coef, self.free)
+        return Sensitivities(out[:, :n], d_x0, d_coef, free)
 
     def rhs_and_jacobian(self, u, coef):
         """``(f, dfdx)``: numpy callables of the state ``(n,)`` giving the model's
