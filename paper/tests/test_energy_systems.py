@@ -47,7 +47,11 @@ def test_true_friction_of_a_chain_meets_the_turning_point_constraint():
     admits the true law (at single samples, without the slow passage, it did not)."""
     from discrepancy.energy import DissipationDiscrepancy
 
-    rec = energy_recordings.simulate(2, "Stribeck", 0)
+    # The chain's energy falls to 15 % at 15.8 s of its drawn 46 s, so 17 s simulates the
+    # whole recording; at tolerance 1e-6 rather than the experiments' 1e-10 the turning
+    # points are the same (32 and 36) and the holding torques move by 1e-4 of themselves
+    # (joint 2's smallest: 4.7884 against 4.7878 mN m; its true static friction 3.68 mN m)
+    rec = energy_recordings.simulate(2, "Stribeck", 0, tolerance=1e-6, seconds=17.0)
     record = DissipationDiscrepancy.from_system(rec.model).prepare(rec.x, rec.t)
     for joint, static in enumerate(rec.static_friction()):
         index, holding = record.turns(len(rec.t), joint)

@@ -102,9 +102,11 @@ def run(out_dir, *, quick: bool = False):
     rep.text(__doc__.split("\n", 1)[1].strip())
     cases = {name: fit_case(case, seeds, t) for name, case in CASES.items()}
     report_cases(rep, cases, CASES, seeds)
-    report_disturbance(rep, disturbance_case(quick=quick))
+    shown = disturbance_case(quick=quick)       # seed 11, also the first repeated seed
+    report_disturbance(rep, shown)
     report_disturbance_seeds(rep, [
-        {"seed": s, **disturbance_errors(disturbance_case(quick=quick, seed=s))}
+        {"seed": s, **disturbance_errors(shown if s == DISTURBANCE_SEEDS[0] else
+                                         disturbance_case(quick=quick, seed=s))}
         for s in DISTURBANCE_SEEDS[:2 if quick else None]])
     return rep.write()
 

@@ -145,14 +145,21 @@ def draw(links: int, family: str, seed: int) -> dict:
 
 
 @functools.lru_cache(maxsize=16)
-def simulate(links: int, family: str, seed: int) -> Recording:
+def simulate(links: int, family: str, seed: int, *, tolerance: float = 1e-10,
+             seconds: float | None = None) -> Recording:
     """The recording ``(links, family, seed)``: simulated, read by encoders, cut where 15 %
     of the initial energy above rest is left. Kept for the process (a chain with Stribeck
-    friction takes about a minute of CPU at the tolerances used): treat it as read-only."""
+    friction takes about a minute of CPU at the tolerances used): treat it as read-only.
+
+    ``tolerance`` (the integrator's ``rtol`` and ``atol``) and ``seconds`` (the simulated
+    span, default the drawn one; the recording ends there if the energy has not yet fallen
+    to 15 %) exist for quick tests: the experiments use the defaults. A shorter span leaves
+    the states before its last step unchanged (scipy's adaptive steps do not look ahead)."""
     spec = draw(links, family, seed)
     true, model = chain(spec["masses"], spec["lengths"], spec["laws"], spec["drag"])
-    t = np.arange(int(spec["seconds"] * spec["rate"]) + 1) / spec["rate"]
-    x = true.simulate(np.r_[spec["start"], np.zeros(links)], t, rtol=1e-10, atol=1e-10)
+    span = spec["seconds"] if seconds is None else min(seconds, spec["seconds"])
+    t = np.arange(int(span * spec["rate"]) + 1) / spec["rate"]
+    x = true.simulate(np.r_[spec["start"], np.zeros(links)], t, rtol=tolerance, atol=tolerance)
     step = 2 * np.pi / spec["counts"]
     q = np.round(x[:, :links] / step) * step
     rest = float(model.energy(np.zeros((1, 2 * links)))[0])

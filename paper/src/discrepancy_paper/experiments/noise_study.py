@@ -26,6 +26,9 @@ from .report import Report
 
 LEVELS = (0.0, 0.01, 0.02, 0.05, 0.1, 0.2)
 METHODS = ("defaults", "paper settings", "weak form", "PySINDy defaults", "PySINDy weak")
+#: methods whose fit depends on the data alone (PySINDy's weak library draws its sub-domains
+#: from numpy's global generator, so its noise-free seeds differ)
+DETERMINISTIC = METHODS[:4]
 
 
 def _lorenz(x, u=None, rho=28.0):
@@ -127,6 +130,9 @@ def _study(name, system, levels, seeds):
             noisy = x + level * x.std(axis=0) * np.random.default_rng(seed).standard_normal(
                 x.shape)
             for method in METHODS:
+                if level == 0 and seed != seeds[0] and method in DETERMINISTIC:
+                    scores[method].append(scores[method][0])   # noise-free: the same data
+                    continue
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     coef = _ours(method, system, noisy, system["dt"]) if \
