@@ -16,9 +16,10 @@ demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/discrepancy reproduce all --out out/
 
 # Two workers (the machines have 2 cores); a module's tests stay on one worker, so its
-# expensive fixtures (a whole campaign, a simulated recording) are computed once.
+# expensive fixtures (a whole campaign, a simulated recording) are computed once; the ten
+# slowest tests are listed at the end.
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadscope
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadscope --durations=10
 
 # The inner loop: everything but the end-to-end tests marked slow (`make test` runs those too).
 test-fast: $(STAMP)
