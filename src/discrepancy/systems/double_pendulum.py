@@ -153,7 +153,9 @@ class DoublePendulum(System):
         return {symbol(k): v for k, v in self.parameters.as_dict().items()}
 
     def _compiled(self):
-        key = tuple(self._numbers().values())
+        # frozen parameters compare by value (building a dict of symbols as the key cost most
+        # of a right-hand side's call)
+        key = self.parameters
         if getattr(self, "_cache_key", None) != key:
             kinetic, potential, _, mass, rest = _symbolic_model()
             subs = self._numbers()
