@@ -34,11 +34,12 @@ from ...hybrid.codegen import BufferedFunction, compiled
 BLOCK = 256
 #: work (sample intervals over all records times the width of the sensitivity state) from
 #: which the blocks are compiled. Compiling takes about 1 s at width 26 and 40 s at width
-#: 192 (it grows like the square of the width); a fit evaluates the sensitivities tens to
-#: hundreds of times, each costing about a microsecond per interval and width unit in
-#: CasADi's virtual machine and a sixth of that compiled: 25,000 intervals of a two-state
-#: model with 10 free terms (650,000) compile, a short record with a small library does not
-COMPILE_WORK = 100_000
+#: 192 (it grows like the square of the width); a fit evaluates the sensitivities hundreds
+#: of times, each costing about a microsecond per interval and width unit in CasADi's
+#: virtual machine and a sixth of that compiled. The Cascaded Tanks (767 intervals, width
+#: 46: 35,000) compile, and its reproduction went from 88 s to 31 s with the same results;
+#: the short records of most tests (a few hundred samples of a small model) do not
+COMPILE_WORK = 25_000
 
 
 def worth_compiling(intervals: int, n: int, n_free: int) -> bool:
