@@ -11,7 +11,7 @@ import warnings
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
@@ -60,8 +60,17 @@ def refusal(x, x_dot, weights, degree, bias) -> bool:
     return not all(np.all(np.isfinite(v)) for v in sums) or not np.any(theta)
 
 
+SUBNORMAL = np.array([5e-324, 5e-324])     # the smallest weights, relative to each other 1
+
+
 @FAST
 @given(sample=data(), degree=st.integers(0, 3), bias=st.booleans())
+@example(sample=(np.array([[0.0], [1.0]]), np.array([[1.0], [1.0]]), SUBNORMAL), degree=1,
+         bias=True)
+@example(sample=(np.array([[0.0], [0.0]]), np.array([[1.5], [0.0]]), SUBNORMAL), degree=0,
+         bias=True)
+@example(sample=(np.array([[0.5], [0.5]]), np.array([[0.0], [0.0]]), SUBNORMAL), degree=1,
+         bias=False)
 def test_fit_equals_numpy_least_squares_or_refuses(sample, degree, bias):
     x, x_dot, weights = sample
     model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(degree, include_bias=bias),

@@ -8,12 +8,17 @@ naming the argument.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import DataError, ShapeError, describe
 from .validation import check_array, check_finite, check_times, is_uniform  # noqa: F401
+
+#: largest sample weight below which all weights are divided by it (only their ratios
+#: matter; subnormal weights such as 5e-324 would make the weighted sums of squares 0)
+TINY_WEIGHT = 1e-100
 
 
 @dataclass(frozen=True)
@@ -125,6 +130,10 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
     if sample_weight is not None and not any(np.any(tr.weight > 0) for tr in out):
         raise DataError("sample_weight must have at least one positive weight; all are 0, "
                         "which leaves nothing to fit")
+    if sample_weight is not None:
+        top = max(float(tr.weight.max()) for tr in out)
+        if top < TINY_WEIGHT:     # relative weights: rescaled, or the Gram sums underflow
+            out = [dataclasses.replace(tr, weight=tr.weight / top) for tr in out]
     return out
 
 
