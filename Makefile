@@ -15,18 +15,15 @@ $(STAMP): pyproject.toml paper/pyproject.toml constraints.txt
 demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/discrepancy reproduce all --out out/
 
-# Two workers (the machines have 2 cores), each with one BLAS thread (two workers with two
-# threads each oversubscribe the cores); a module's tests stay on one worker, so its
+# Two workers (the machines have 2 cores); a module's tests stay on one worker, so its
 # expensive fixtures (a whole campaign, a simulated recording) are computed once; the ten
 # slowest tests are listed at the end.
 test: $(STAMP)
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 MPLBACKEND=Agg \
-		$(BIN)/python -m pytest -q -n 2 --dist loadscope --durations=10
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadscope --durations=10
 
 # The inner loop: everything but the end-to-end tests marked slow (`make test` runs those too).
 test-fast: $(STAMP)
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 MPLBACKEND=Agg \
-		$(BIN)/python -m pytest -q -n 2 --dist loadscope -m "not slow"
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadscope -m "not slow"
 
 # The site in docs/_build/html: API pages from the docstrings, the gallery (examples/) run,
 # warnings are errors; then every public name and internal link is checked.
