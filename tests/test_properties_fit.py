@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import discrepancy as dc
+from discrepancy.data.trajectory import TINY_WEIGHT
 from discrepancy.errors import DiscrepancyError, IllConditionedWarning
 from discrepancy.symbolic import symbol
 
@@ -45,19 +46,24 @@ def dense_polynomial(x: np.ndarray, degree: int, bias: bool) -> np.ndarray:
 
 def refusal(x, x_dot, weights, degree, bias) -> bool:
     """Whether a fit must be refused: non-finite data, no columns, all weights 0, all
-    columns 0, or sums of squares beyond float range (the last two over the rows of positive
-    weight: a row of weight 0 adds nothing to the fit)."""
+    columns 0, or sums of squares beyond float range, all underflowing to 0 or one of them
+    subnormal (the last three over the rows of positive weight: a row of weight 0 adds
+    nothing to the fit)."""
     if not np.all(np.isfinite(x)) or (degree == 0 and not bias):
         return True
     if weights is not None and not np.any(weights > 0):
         return True
     w = np.ones(len(x)) if weights is None else weights
+    if w.max() < TINY_WEIGHT:          # the fit divides such weights by their largest
+        w = w / w.max()
     kept = w > 0
     with np.errstate(over="ignore", invalid="ignore"):
         theta = dense_polynomial(x[kept], degree, bias)
         sums = [np.einsum("i,ij,ij->j", w[kept], theta, theta),
                 np.einsum("i,ij,ij->j", w[kept], x_dot[kept], x_dot[kept])]
-    return not all(np.all(np.isfinite(v)) for v in sums) or not np.any(theta)
+    tiny = np.finfo(float).tiny       # below it the sums of squares have lost precision
+    return not all(np.all(np.isfinite(v)) for v in sums) or not np.any(theta) \
+        or not np.any(sums[0]) or bool(np.any((sums[0] > 0) & (sums[0] < tiny)))
 
 
 SUBNORMAL = np.array([5e-324, 5e-324])     # the smallest weights, relative to each other 1
@@ -71,6 +77,10 @@ SUBNORMAL = np.array([5e-324, 5e-324])     # the smallest weights, relative to e
          bias=True)
 @example(sample=(np.array([[0.5], [0.5]]), np.array([[0.0], [0.0]]), SUBNORMAL), degree=1,
          bias=False)
+@example(sample=(np.array([[1.0], [0.0]]), np.array([[1.5], [0.0]]), np.array([5e-324, 1.0])),
+         degree=1, bias=False)
+@example(sample=(np.array([[1.1402583e-232], [1.1402583e-232]]), np.zeros((2, 1)), None),
+         degree=1, bias=False)
 def test_fit_equals_numpy_least_squares_or_refuses(sample, degree, bias):
     x, x_dot, weights = sample
     model = dc.DiscrepancyModel(feature_library=dc.PolynomialLibrary(degree, include_bias=bias),

@@ -212,7 +212,13 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
             raise DataError("stats hold no samples: nothing to fit")
         if not np.any(stats.gram):
             raise DataError("the statistics are all zero: every sample has weight 0 or every "
-                            "library column is 0 on these data; nothing to fit")
+                            "library column is 0 on these data (or so small that their "
+                            "squares underflow); nothing to fit")
+        diagonal = np.abs(np.diag(stats.gram))
+        if np.any((diagonal > 0) & (diagonal < np.finfo(float).tiny)):
+            raise DataError("a library column's weighted sum of squares is below the smallest "
+                            f"normal number ({np.finfo(float).tiny:.1e}), so it has lost its "
+                            "precision: rescale the data (or the sample weights)")
 
         optimizer = copy.deepcopy(setup.optimizer)
         optimizer.fit_statistics(stats)
