@@ -24,7 +24,7 @@ def _pair(measured, predicted):
     return y, y_hat
 
 
-def _spread(y, size, what: str) -> np.ndarray:
+def _spread(size, what: str) -> np.ndarray:
     """``size`` ``(k,)`` of each measured column, refused where it is zero (a constant
     signal: the normalised figure is undefined, not huge)."""
     flat = np.flatnonzero(size == 0)
@@ -45,13 +45,13 @@ def rms_error(measured, predicted) -> np.ndarray | float:
 def nrmse(measured, predicted) -> np.ndarray | float:
     """RMS error over the standard deviation of ``measured``, per column."""
     y, y_hat = _pair(measured, predicted)
-    out = np.sqrt(np.mean((y_hat - y) ** 2, axis=0)) / _spread(y, y.std(axis=0), "nrmse")
+    out = np.sqrt(np.mean((y_hat - y) ** 2, axis=0)) / _spread(y.std(axis=0), "nrmse")
     return float(out[0]) if out.size == 1 else out
 
 
 def fit_percent(measured, predicted) -> np.ndarray | float:
     """``100 (1 - |y - ŷ| / |y - mean(y)|)`` per column."""
     y, y_hat = _pair(measured, predicted)
-    spread = _spread(y, np.linalg.norm(y - y.mean(axis=0), axis=0), "fit_percent")
+    spread = _spread(np.linalg.norm(y - y.mean(axis=0), axis=0), "fit_percent")
     out = 100 * (1 - np.linalg.norm(y - y_hat, axis=0) / spread)
     return float(out[0]) if out.size == 1 else out

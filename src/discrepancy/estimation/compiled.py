@@ -111,7 +111,6 @@ def fast_call(function):
     def call(values):
         return buffered(values)[:, 0].copy()
 
-    call.keep = buffered
     return call
 
 

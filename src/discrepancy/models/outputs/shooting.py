@@ -94,8 +94,7 @@ class ShootingModel:
         rhs = prior_expression(setup.prior, x, u, check_points=check_points) + \
             ca.mtimes(xi, theta)
         f = ca.Function("f", [x, u, coef], [rhs])
-        self._rhs_jacobian = ca.Function("f_and_jacobian", [x, u, coef],
-                                         [rhs, ca.jacobian(rhs, x)])
+        self._rhs, self._rhs_jacobian = f, None
         self.library_function = ca.Function("theta", [x, u], [theta])
         prior = rhs - ca.mtimes(xi, theta)
         self._prior_uses = _uses(ca.jacobian(prior, x))       # (n, n): f_m,j uses x_i
@@ -164,6 +163,13 @@ class ShootingModel:
     def rhs_and_jacobian(self, u, coef):
         """``(f, dfdx)``: numpy callables of the state ``(n,)`` giving the model's
         derivative ``(n,)`` and its Jacobian ``(n, n)`` at input ``u`` ``(r,)``."""
+        if self._rhs_jacobian is None:      # only initial-state fits need it: built then
+            ca = casadi_module()
+            x, u_sym = ca.SX.sym("x", self.n), ca.SX.sym("u", self.r)
+            c_sym = ca.SX.sym("c", self.n * self.p)
+            value = self._rhs(x, u_sym, c_sym)
+            self._rhs_jacobian = ca.Function("f_and_jacobian", [x, u_sym, c_sym],
+                                             [value, ca.jacobian(value, x)])
         c = np.asarray(coef, dtype=float).ravel()
 
         def f(x):
