@@ -1,4 +1,4 @@
-"""The adversarial suite tries 1119 distinct bad or edge inputs over every public entry point.
+"""The adversarial suite tries 1120 distinct bad or edge inputs over every public entry point.
 
 | entry point | rows |
 |---|---|
@@ -25,13 +25,13 @@
 | metrics | 9 |
 | symbolic | 15 |
 | data | 5 |
-| selection | 5 |
+| selection | 6 |
 | systems | 8 |
 | pde | 33 |
 | plots | 10 |
-| total | 1119 |
+| total | 1120 |
 
-898 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
+899 rows must raise a DiscrepancyError subclass (also the matching builtin) whose message
 matches a pattern naming the argument; 221 must give the right answer, checked against an
 exact value (closed forms, numpy least squares, the in-memory fit). The 51 isolated rows
 (resource limits, would-be hangs, the real command line) run in one child process under a

@@ -346,6 +346,7 @@ CASES = [
     Case("selection", "ForecastSelection.improvement", lambda: CHOSEN.forecast_selection_.improvement(), returns(lambda v: np.isfinite(v))),
     Case("selection", "ProcedureChoice.table", lambda: PROCEDURE.table(), returns(lambda text: "prior alone" in text)),
     Case("selection", "choose_procedure zero origins", lambda: dc.choose_procedure(fast(), X, T, n_origins=0), raises(ParameterError, r"n_origins")),
+    Case("selection", "choose_procedure join not a bool", lambda: dc.choose_procedure(fast(), X, T, join="yes"), raises(ParameterError, r"join must be")),
     Case("selection", "choose_procedure numpy origins", lambda: dc.choose_procedure(dc.DiscrepancyModel(prior=lambda x, u: np.c_[x[:, 1], -x[:, 0]]), X, T, n_origins=np.int64(2), candidates={"linear": dc.PolynomialLibrary(1)}, progress=False).chosen, returns(lambda name: name == "prior alone")),
     Case("stream", "Chunk.rows past the end", lambda: dc.Chunk(X[:5], t=T[:5]).rows(10, 20), raises(ParameterError, r"start and stop must be row numbers up to 5")),
     Case("stream", "Chunk.rows numpy bounds", lambda: dc.Chunk(X[:5], t=T[:5]).rows(np.int64(1), np.int64(3)).x, returns(equal(X[1:3]))),

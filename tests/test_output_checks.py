@@ -110,8 +110,44 @@ def test_libraries_chosen_by_output_forecasts_find_the_hidden_cubic_spring():
     candidates = {"linear": dc.PolynomialLibrary(1, variables=["pos", "vel"]),
                   "cubic": dc.PolynomialLibrary(3, variables=["pos", "vel"])}
     choice = dc.choose_procedure(model(), y, t=T, u=u, outputs=["pos"], candidates=candidates,
-                                 n_origins=2, fit_kws={"progress": False}, progress=False)
+                                 n_origins=2, fit_kws={"progress": False, "u_hold": "linear"},
+                                 progress=False)
     assert choice.chosen == "cubic"
     assert choice.scores["prior alone"]["mean"] > 5 * choice.scores["cubic"]["mean"]
+    names = choice.model.get_feature_names()
+    assert choice.model.coef_[1, names.index("pos^3")] == pytest.approx(-0.5, rel=0.05)
+
+
+def held_input_record(seed=5):
+    """x'' = -x - 0.1 x' - 0.5 x^3 + u with u held constant over each sample interval (a
+    zero-order hold, as a digital controller drives a plant), integrated exactly enough by
+    20 RK4 steps per interval; position measured with noise 0.005."""
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-2, 2, len(T))
+    x, h = np.array([0.5, -0.3]), (T[1] - T[0]) / 20
+    f = lambda z, v: np.array([z[1], -z[0] - 0.1 * z[1] - 0.5 * z[0] ** 3 + v])  # noqa: E731
+    states = [x]
+    for v in u[:-1]:
+        for _ in range(20):
+            k1 = f(x, v)
+            k2 = f(x + h / 2 * k1, v)
+            k3 = f(x + h / 2 * k2, v)
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + f(x + h * k3, v))
+        states.append(x)
+    y = np.array(states)[:, 0] + 0.005 * rng.standard_normal(len(T))
+    return u, y
+
+
+@pytest.mark.slow
+def test_a_held_input_is_recognised_by_output_forecasts():
+    """The input is a step each sample: left to the procedure, the hold that forecasts
+    best is the zero-order hold that drove the plant, and the cubic spring is found."""
+    u, y = held_input_record()
+    candidates = {"cubic": dc.PolynomialLibrary(3, variables=["pos", "vel"])}
+    choice = dc.choose_procedure(model(), y, t=T, u=u, outputs=["pos"], candidates=candidates,
+                                 fit_kws={"progress": False}, progress=False)
+    assert choice.settings["u_hold"] == "zoh"
+    assert choice.chosen == "cubic, u_hold=zoh"
+    assert choice.scores["cubic"]["mean"] > 2 * choice.scores[choice.chosen]["mean"]
     names = choice.model.get_feature_names()
     assert choice.model.coef_[1, names.index("pos^3")] == pytest.approx(-0.5, rel=0.05)

@@ -5,7 +5,11 @@ import pytest
 import sympy as sp
 
 import discrepancy as dc
-from discrepancy.selection.candidate_libraries import default_libraries, velocity_states
+from discrepancy.selection.candidate_libraries import (
+    default_libraries,
+    friction_library,
+    velocity_states,
+)
 
 
 def coulomb(x, u):
@@ -46,6 +50,41 @@ def test_a_missing_coulomb_friction_is_found_among_the_default_libraries(frictio
     assert choice.model.coef_[1, names.index(coulomb_term)] == pytest.approx(-0.3, rel=0.03)
     assert set(choice.scores) >= {"prior alone", "linear", "polynomial 3"}
     assert choice.scores["prior alone"]["mean"] > 10 * choice.scores[choice.chosen]["mean"]
+
+
+def spring_and_friction(x, u):
+    return np.stack([x[..., 1], -x[..., 0] - 0.5 * x[..., 0] ** 3
+                     - 0.3 * np.tanh(x[..., 1] / 0.01) + u[..., 0]], axis=-1)
+
+
+def test_two_missing_laws_are_found_by_the_union_of_the_two_best_libraries(helpers):
+    """A cubic spring and Coulomb friction missing at once, and candidates that each hold
+    one law: the joined round's union of the two best holds both, forecasts better than
+    either, and its coefficients are the truth's."""
+    t = np.arange(3001) * 0.01
+    rng = np.random.default_rng(4)
+    xs, us = [], []
+    for w in (0.6, 1.4):
+        xs.append(helpers.integrate(spring_and_friction, [0.0, 1.0], t,
+                                    u=lambda s, w=w: np.array([1.5 * np.sin(w * s)]))
+                  + 0.01 * rng.standard_normal((len(t), 2)))
+        us.append(1.5 * np.sin(w * t)[:, None])
+    x = np.vstack(xs)
+    candidates = {"linear": dc.PolynomialLibrary(1),
+                  "polynomial 3": dc.PolynomialLibrary(3, variables=["x1", "x2"]),
+                  "linear + friction": dc.PolynomialLibrary(1)
+                  + friction_library({"x2": x[:, 1]})}
+    choice = dc.choose_procedure(dc.DiscrepancyModel(prior=forced_oscillator), xs, t=0.01,
+                                 u=us, candidates=candidates, progress=False)
+    assert choice.chosen == "polynomial 3 + friction"
+    assert choice.scores[choice.chosen]["round"] == "joined"
+    names, coef = choice.model.get_feature_names(), choice.model.coef_[1]
+    assert coef[names.index("x1^3")] == pytest.approx(-0.5, rel=0.03)
+    coulomb_term = next(n for n in names if n.startswith("tanh(") and "exp" not in n)
+    assert coef[names.index(coulomb_term)] == pytest.approx(-0.3, rel=0.03)
+    assert np.count_nonzero(choice.model.coef_) == 2
+    single = min(choice.scores[k]["mean"] for k in candidates)
+    assert choice.scores[choice.chosen]["mean"] < 0.5 * single
 
 
 def test_an_exact_prior_wins_against_every_library(helpers):
@@ -110,7 +149,7 @@ def test_procedure_figure_has_one_column_per_candidate(friction_records):
     candidates = {"linear": dc.PolynomialLibrary(1), "cubic": dc.PolynomialLibrary(3)}
     xs, us = friction_records
     choice = dc.choose_procedure(dc.DiscrepancyModel(prior=forced_oscillator), xs, t=0.01,
-                                 u=us, candidates=candidates, progress=False)
+                                 u=us, candidates=candidates, join=False, progress=False)
     fig = procedure_figure(choice)
     labels = [tick.get_text() for tick in fig.axes[0].get_xticklabels()]
     assert [label.split("\n")[0] for label in labels] == ["prior alone", "linear", "cubic"]

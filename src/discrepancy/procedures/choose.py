@@ -4,10 +4,23 @@
 ``DiscrepancyModel``: every candidate (a library, or a whole unfitted model: library,
 smoothing, optimizer, constraints) and the prior alone is fitted on the first part of every
 record and forecasts what follows, from several origins (rolling origin: the first part
-grows, the last forecast ends where the data end). The candidate with the best mean
-forecast wins by the one-standard-error rule over the origins, the fewest terms first among
-ties, and is fitted on all the data. Nothing but the data given is read, so a test record
-kept apart stays unseen.
+grows, the last forecast ends where the data end). The candidates are entered in rounds:
+
+1. the candidates given (default :func:`~discrepancy.selection.default_libraries`) and the
+   prior alone;
+2. (``join``) the union of the two libraries that forecast best, when both forecast better
+   than the prior alone: a system may miss two kinds of physics at once (a tank's outflow
+   law and its overflow), which no single family holds;
+3. with outputs and inputs, when ``fit_kws`` leaves ``u_hold`` to the procedure, the best
+   candidate so far simulated with each other input hold (how the input moves between
+   samples is part of the procedure: a band-limited input between samples is neither a
+   straight line nor a step).
+
+The candidate with the best mean forecast over every round wins by the one-standard-error
+rule over the origins, the fewest terms first among ties and then the default input hold
+(another hold must forecast better by more than a standard error), and its whole procedure
+is run again on all the data. Nothing but the data given is read, so a test record kept apart
+stays unseen.
 
 Forecasts: with every state measured (``fit``), from the state at the origin over the
 horizon (a quarter of the shortest record unless given), scored as the model's own
@@ -32,6 +45,7 @@ from ..constraints import Integral, Interval, check_argument
 from ..data.trajectory import as_trajectories
 from ..errors import ConvergenceError, ParameterError, describe
 from ..fitting.setup import resolve_names
+from ..hybrid.inputs import HOLDS
 from ..hybrid.outputs import OutputMap
 from ..libraries import FeatureLibrary
 from ..models import DiscrepancyModel
@@ -42,6 +56,9 @@ from ..selection.choice import TOLERANCE
 from .judges import FIRST_ORIGIN, HORIZON_SHARE, StateForecasts
 from .output_forecasts import OutputForecasts
 
+#: the input hold of ``fit_outputs`` when none is given (round 3 tries the others)
+DEFAULT_HOLD = "linear"
+
 
 @dataclass
 class ProcedureChoice:
@@ -50,8 +67,12 @@ class ProcedureChoice:
     Attributes:
         chosen: name of the chosen candidate; model: it, fitted on all the data.
         scores: per candidate ``{"forecast_errors": [per origin], "mean", "se", "n_terms"
-            (fitted on the largest training part), "prior_only"}``; errors are mean scaled
-            squared errors (each state or output divided by its standard deviation).
+            (fitted on the largest training part), "prior_only", "round"}``; errors are mean
+            scaled squared errors (each state or output divided by its standard deviation);
+            ``round`` says where the candidate came from (``"given"``, ``"joined"`` or
+            ``"input hold"``, module doc).
+        settings: the chosen procedure's fit keyword arguments (``fit_kws`` with the chosen
+            ``u_hold``): simulate the model with the same ``u_hold`` and ``substeps``.
         origins: each origin as a share of the records; horizon: forecast length in samples
             (``None``: to each record's end).
     """
@@ -59,23 +80,24 @@ class ProcedureChoice:
     chosen: str
     model: object = field(repr=False)
     scores: dict = field(repr=False)
+    settings: dict = field(default_factory=dict, repr=False)
     origins: list = field(default_factory=list)
     horizon: int | None = None
 
     def table(self) -> str:
         """A text table, one line per candidate: its name, terms, mean forecast error (scaled
         squared error) and standard error over the origins, the chosen one marked."""
-        lines = [f"{'candidate':<32} {'terms':>5} {'forecast error':>14} {'± s.e.':>9}"]
+        lines = [f"{'candidate':<40} {'terms':>5} {'forecast error':>14} {'± s.e.':>9}"]
         for name, row in self.scores.items():
             mark = "  <- chosen" if name == self.chosen else ""
-            lines.append(f"{name:<32} {row['n_terms']:>5} {row['mean']:>14.5g} "
+            lines.append(f"{name:<40} {row['n_terms']:>5} {row['mean']:>14.5g} "
                          f"{row['se']:>9.2g}{mark}")
         return "\n".join(lines)
 
 
 def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
                      n_origins: int = 3, horizon: int | None = None, fit_kws=None,
-                     progress: bool | None = None) -> ProcedureChoice:
+                     join: bool = True, progress: bool | None = None) -> ProcedureChoice:
     """Choose a library or procedure for ``model`` by forecasts inside ``x``.
 
     Args:
@@ -91,10 +113,13 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
         horizon: forecast length in samples (state fits; default a quarter of the shortest
             record; each window is scored until the prior's sensitivity to its initial state
             says forecasts stop meaning anything, as in the model's own selection).
-        fit_kws: further keyword arguments of ``fit`` or ``fit_outputs``.
+        fit_kws: further keyword arguments of ``fit`` or ``fit_outputs``. With outputs and
+            inputs, a ``u_hold`` left out here is chosen too (module doc).
+        join: also score the union of the two libraries that forecast best (module doc).
     """
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
     check_argument("n_origins", n_origins, Interval(Integral, 2))
+    check_argument("join", join, bool)
     fit_kws = dict(fit_kws or {})
     templates = _templates(model, candidates, records, outputs, fit_kws)
     shortest = min(r.n_samples for r in records)
@@ -102,32 +127,100 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     if not 0 < share < 1 - FIRST_ORIGIN:
         raise ParameterError(f"horizon must be a number of samples below "
                              f"{int(shortest * (1 - FIRST_ORIGIN))}; got {horizon!r}")
-    fractions = np.linspace(FIRST_ORIGIN, 1 - share, n_origins)
-    judge = OutputForecasts(records, outputs, fit_kws) if outputs is not None else \
-        StateForecasts(records, fit_kws, horizon)
-    scores, fitted = {}, {}
-    for name, template in tqdm(list(templates.items()), desc="procedures",
-                               disable=None if progress is None else not progress):
-        errors, last = [], None
-        for f in fractions:
-            errors.append(judge.score(template, f))
+    contest = _Contest(records, outputs, fit_kws, horizon,
+                       np.linspace(FIRST_ORIGIN, 1 - share, n_origins), progress)
+    contest.enter(templates, "given")
+    if join:
+        names = [n for group in _names(model, records, outputs) for n in group]
+        contest.enter(_joined(templates, contest.scores, names), "joined")
+    if outputs is not None and records[0].u is not None and "u_hold" not in fit_kws:
+        pick = contest.pick()
+        contest.enter({f"{pick}, u_hold={hold}": contest.entries[pick][0]
+                       for hold in HOLDS if hold != DEFAULT_HOLD}, "input hold",
+                      holds=[h for h in HOLDS if h != DEFAULT_HOLD])
+    pick = contest.pick()
+    template, settings = contest.entries[pick]
+    final = contest.judge(settings).fit(template, 1.0)
+    return ProcedureChoice(pick, final, contest.scores, settings,
+                           contest.fractions.tolist(), contest.judge(settings).horizon)
+
+
+class _Contest:
+    """Candidates entered in rounds, each fitted and scored from every origin by the judge
+    of its fit settings; :meth:`pick` applies the one-standard-error rule to all of them."""
+
+    def __init__(self, records, outputs, fit_kws, horizon, fractions, progress):
+        self.records, self.outputs, self.fit_kws = records, outputs, fit_kws
+        self.horizon, self.fractions = horizon, fractions
+        self.disable = None if progress is None else not progress
+        self.entries, self.scores, self._judges = {}, {}, {}
+        self._hold = fit_kws.get("u_hold", DEFAULT_HOLD)
+
+    def judge(self, settings):
+        key = settings.get("u_hold")
+        if key not in self._judges:
+            self._judges[key] = (OutputForecasts(self.records, self.outputs, settings)
+                                 if self.outputs is not None else
+                                 StateForecasts(self.records, settings, self.horizon))
+        return self._judges[key]
+
+    def enter(self, templates, round_name, holds=None):
+        """Score ``templates`` (name -> unfitted model); ``holds``: each one's ``u_hold``."""
+        holds = [None] * len(templates) if holds is None else holds
+        items = list(zip(templates.items(), holds, strict=True))
+        for (name, template), hold in tqdm(items, desc=f"procedures ({round_name})",
+                                           disable=self.disable):
+            settings = self.fit_kws if hold is None else {**self.fit_kws, "u_hold": hold}
+            judge, errors = self.judge(settings), []
+            for f in self.fractions:
+                errors.append(judge.score(template, f))
             last = judge.last
-        scores[name] = {"forecast_errors": errors, "mean": float(np.mean(errors)),
-                        "se": float(np.std(errors, ddof=1) / np.sqrt(len(errors))),
-                        "n_terms": 0 if last is None else int(np.count_nonzero(last.coef_)),
-                        "prior_only": last is None or bool(last.prior_only_)}
-        fitted[name] = template
-    names = list(scores)
-    mean = np.array([scores[k]["mean"] for k in names])
-    se = np.array([scores[k]["se"] for k in names])
-    finite = np.isfinite(mean)
-    if not finite.any():
-        raise ConvergenceError("every candidate's forecasts diverged on these data")
-    mean = np.where(finite, mean, np.inf)
-    margin = np.maximum(np.nan_to_num(se, nan=0.0), TOLERANCE * mean[finite].min())
-    pick = names[one_standard_error(mean, margin, [scores[k]["n_terms"] for k in names])]
-    final = judge.fit(fitted[pick], 1.0)
-    return ProcedureChoice(pick, final, scores, fractions.tolist(), judge.horizon)
+            self.scores[name] = {
+                "forecast_errors": errors, "mean": float(np.mean(errors)),
+                "se": float(np.std(errors, ddof=1) / np.sqrt(len(errors))),
+                "n_terms": 0 if last is None else int(np.count_nonzero(last.coef_)),
+                "prior_only": last is None or bool(last.prior_only_), "round": round_name}
+            self.entries[name] = (template, settings)
+
+    def pick(self) -> str:
+        names = list(self.scores)
+        mean = np.array([self.scores[k]["mean"] for k in names])
+        se = np.array([self.scores[k]["se"] for k in names])
+        finite = np.isfinite(mean)
+        if not finite.any():
+            raise ConvergenceError("every candidate's forecasts diverged on these data")
+        mean = np.where(finite, mean, np.inf)
+        margin = np.maximum(np.nan_to_num(se, nan=0.0), TOLERANCE * mean[finite].min())
+        # simplest first: fewest terms, then the default input hold
+        sizes = [(self.scores[k]["n_terms"],
+                  self.entries[k][1].get("u_hold", DEFAULT_HOLD) != self._hold) for k in names]
+        return names[one_standard_error(mean, margin, sizes)]
+
+
+def _joined(templates, scores, names) -> dict:
+    """The union of the two candidates whose libraries forecast best, when both forecast
+    better than the prior alone, with the better one's other settings (name: their names'
+    parts, each once; ``linear`` left out beside a polynomial)."""
+    prior = scores["prior alone"]["mean"]
+    ranked = sorted((scores[k]["mean"], k) for k, m in templates.items()
+                    if k != "prior alone" and scores[k]["mean"] < prior
+                    and isinstance(m.feature_library, FeatureLibrary))
+    if len(ranked) < 2:
+        return {}
+    (_, a), (_, b) = ranked[:2]
+    parts = list(dict.fromkeys([*a.split(" + "), *b.split(" + ")]))
+    if any(p.startswith("polynomial") for p in parts):      # which hold the linear terms
+        parts = [p for p in parts if p != "linear"]
+    first, second = templates[a].feature_library, templates[b].feature_library
+    library = first + second
+    if _width(library, names) == max(_width(first, names), _width(second, names)):
+        return {}                                   # one library holds the other
+    return {" + ".join(parts): clone(templates[a]).set_params(feature_library=library)}
+
+
+def _width(library, names) -> int:
+    """Number of terms ``library`` makes of the variables ``names``."""
+    return len(clone(library).fit(names).get_feature_names())
 
 
 def _templates(model, candidates, records, outputs, fit_kws) -> dict:
@@ -135,13 +228,9 @@ def _templates(model, candidates, records, outputs, fit_kws) -> dict:
         raise ParameterError(f"model must be an unfitted DiscrepancyModel; got "
                              f"{describe(model)}")
     if candidates is None:
-        first = records[0]
-        r = 0 if first.u is None else first.u.shape[1]
-        n = first.x.shape[1] if outputs is None else state_count(model)
-        states = resolve_names("state_names", model.state_names, n, "x", one=None)
-        inputs = resolve_names("input_names", model.input_names, r, "u", one="u")
+        states, inputs = _names(model, records, outputs)
         x = _variables_with_data(model, records, states, outputs, fit_kws)
-        u = None if first.u is None else np.vstack([rec.u for rec in records])
+        u = None if records[0].u is None else np.vstack([rec.u for rec in records])
         candidates = default_libraries(states, inputs, x, u, prior=model.prior)
     if not isinstance(candidates, Mapping) or not candidates:
         raise ParameterError(f"candidates must be a non-empty mapping of names to libraries "
@@ -156,6 +245,15 @@ def _templates(model, candidates, records, outputs, fit_kws) -> dict:
             raise ParameterError(f"candidates[{name!r}] must be a FeatureLibrary, a library "
                                  f"spec or an unfitted DiscrepancyModel; got {describe(c)}")
     return out
+
+
+def _names(model, records, outputs) -> tuple[list, list]:
+    """The model's state and input names for these records (defaults where unset)."""
+    first = records[0]
+    r = 0 if first.u is None else first.u.shape[1]
+    n = first.x.shape[1] if outputs is None else state_count(model)
+    return (resolve_names("state_names", model.state_names, n, "x", one=None),
+            resolve_names("input_names", model.input_names, r, "u", one="u"))
 
 
 def _variables_with_data(model, records, states, outputs, fit_kws):
