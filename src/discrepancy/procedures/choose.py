@@ -199,8 +199,10 @@ class _Contest:
 
 def _joined(templates, scores, names) -> dict:
     """The union of the two candidates whose libraries forecast best, when both forecast
-    better than the prior alone, with the better one's other settings (name: their names'
-    parts, each once; ``linear`` left out beside a polynomial)."""
+    better than the prior alone, with the better one's other settings; none when one
+    library holds the other. Name: their names' parts, each once (of the polynomials only
+    the highest degree, ``linear`` left out beside one). ``names``: the variables the
+    libraries are made of."""
     prior = scores["prior alone"]["mean"]
     ranked = sorted((scores[k]["mean"], k) for k, m in templates.items()
                     if k != "prior alone" and scores[k]["mean"] < prior
@@ -209,8 +211,10 @@ def _joined(templates, scores, names) -> dict:
         return {}
     (_, a), (_, b) = ranked[:2]
     parts = list(dict.fromkeys([*a.split(" + "), *b.split(" + ")]))
-    if any(p.startswith("polynomial") for p in parts):      # which hold the linear terms
-        parts = [p for p in parts if p != "linear"]
+    degrees = [p for p in parts if p.startswith("polynomial ")]
+    if degrees:             # the highest degree holds the lower ones and the linear terms
+        top = max(degrees, key=lambda p: p.split()[-1])
+        parts = [p for p in parts if p == top or (p != "linear" and p not in degrees)]
     first, second = templates[a].feature_library, templates[b].feature_library
     library = first + second
     if _width(library, names) == max(_width(first, names), _width(second, names)):
