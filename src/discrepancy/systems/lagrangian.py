@@ -137,7 +137,8 @@ class LagrangianSystem(System):
                 raise ShapeError(f"u is required: (m, {r}) = {list(self.input_names)}")
             z = np.hstack([x, np.broadcast_to(np.asarray(u, float).reshape(-1, r), (m, r))])
         k = len(self.position_names)
-        values = [np.broadcast_to(v, (m,)) for v in self._functions(friction)(z)]
+        values = [v if v.shape == (m,) else np.broadcast_to(v, (m,))
+                  for v in self._functions(friction)(z)]
         matrix = np.stack(values[:k * k], axis=-1).reshape(m, k, k)
         b = np.stack(values[k * k:], axis=-1)
         acc = solve_mass(matrix, b, x, self.state_names)
