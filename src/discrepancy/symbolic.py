@@ -19,24 +19,11 @@ import numpy as np
 import sympy as sp
 
 from .errors import ExportError, ModelFileError
+from .expression_tape import CompiledExpressions
+from .symbolic_functions import FUNCTIONS, NARY_FUNCTIONS
+from .symbolic_functions import finite_number as _number
 
 IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-
-# name -> (sympy constructor, numpy function, casadi function name)
-FUNCTIONS: dict[str, tuple[Callable, Callable, str | None]] = {
-    "sin": (sp.sin, np.sin, "sin"), "cos": (sp.cos, np.cos, "cos"),
-    "tan": (sp.tan, np.tan, "tan"), "exp": (sp.exp, np.exp, "exp"),
-    "log": (sp.log, np.log, "log"), "tanh": (sp.tanh, np.tanh, "tanh"),
-    "sinh": (sp.sinh, np.sinh, "sinh"), "cosh": (sp.cosh, np.cosh, "cosh"),
-    "atan": (sp.atan, np.arctan, "atan"), "asin": (sp.asin, np.arcsin, "asin"),
-    "acos": (sp.acos, np.arccos, "acos"), "Abs": (sp.Abs, np.abs, "fabs"),
-    "sign": (sp.sign, np.sign, "sign"),
-}
-# functions of two or more arguments (saturations, clipping): same triple, applied pairwise
-NARY_FUNCTIONS: dict[str, tuple[Callable, Callable, str]] = {
-    "Min": (sp.Min, np.minimum, "fmin"), "Max": (sp.Max, np.maximum, "fmax"),
-}
-
 
 def symbol(name: str) -> sp.Symbol:
     """The real symbol used for a variable name everywhere in the package."""
@@ -71,60 +58,18 @@ def adopt(expr, names: Sequence[str], *, label: str) -> sp.Expr:
     return expr.xreplace({s: symbol(s.name) for s in expr.free_symbols})
 
 
-def _number(expr) -> float:
-    value = complex(expr)
-    if value.imag != 0 or not np.isfinite(value.real):
-        raise ExportError(f"the constant {expr} is not a finite real number")
-    return value.real
-
-
 def compile_numpy(expr: sp.Expr, names: Sequence[str],
                   functions: Mapping[str, Callable] | None = None) -> Callable:
     """Vectorised evaluator of ``expr``: ``f(Z)`` with ``Z`` ``(m, len(names))`` -> ``(m,)``.
 
     ``functions`` maps names of undefined sympy functions (user numpy terms)
-    to numpy callables.
+    to numpy callables. The expression runs as a tape of numpy steps, a repeated
+    subexpression once (:mod:`~discrepancy.expression_tape`).
     """
-    index = {n: i for i, n in enumerate(names)}
-    functions = dict(functions or {})
-
-    def build(e):
-        if e.is_Symbol:
-            if e.name not in index:
-                raise ExportError(f"expression uses variable {e.name!r}, not one of {list(names)}")
-            i = index[e.name]
-            return lambda Z: Z[:, i]
-        if e.is_number:
-            c = _number(e)
-            return lambda Z: np.full(Z.shape[0], c)
-        args = [build(a) for a in e.args]
-        if e.is_Add:
-            return lambda Z: _reduce(np.add, args, Z)
-        if e.is_Mul:
-            return lambda Z: _reduce(np.multiply, args, Z)
-        if e.is_Pow:
-            base, ex = args[0], e.args[1]
-            if ex.is_Integer and int(ex) == 2:
-                return lambda Z: np.square(base(Z))
-            if ex.is_number:
-                p = _number(ex)
-                return lambda Z: np.power(base(Z), p)
-            return lambda Z: np.power(base(Z), args[1](Z))
-        name = type(e).__name__
-        if name in FUNCTIONS:
-            f = FUNCTIONS[name][1]
-            return lambda Z: f(args[0](Z))
-        if name in NARY_FUNCTIONS:
-            return lambda Z: _reduce(NARY_FUNCTIONS[name][1], args, Z)
-        if isinstance(e, sp.core.function.AppliedUndef) and name in functions:
-            return _user_call(name, functions[name], args)
-        raise ExportError(f"cannot evaluate {e} numerically: {name} is not a supported function "
-                          f"(supported: {', '.join(sorted(FUNCTIONS))}, or user functions "
-                          f"{sorted(functions)})")
-
     if not isinstance(expr, sp.Basic):
         raise ExportError(f"expected a sympy expression, got {type(expr).__name__}")
-    return CompiledExpression(build(expr), expr, list(names), functions)
+    return CompiledExpression(CompiledExpressions([expr], names, functions), expr, list(names),
+                              functions)
 
 
 class CompiledExpression:
@@ -135,36 +80,10 @@ class CompiledExpression:
         self._evaluate, self._source = evaluate, (expr, names, functions or None)
 
     def __call__(self, Z):
-        return self._evaluate(Z)
+        return self._evaluate(Z)[0]
 
     def __reduce__(self):
         return compile_numpy, self._source
-
-
-def _user_call(name: str, f: Callable, args: list[Callable]) -> Callable:
-    """``Z -> f(*args(Z))`` for a user's numpy function, its failures named (FeatureError)."""
-    from .errors import FeatureError
-
-    def call(Z):
-        try:
-            value = f(*[a(Z) for a in args])
-        except Exception as e:
-            raise FeatureError(f"user function {name!r} raised {type(e).__name__}: {e}") from e
-        if np.iscomplexobj(value):
-            raise FeatureError(f"user function {name!r} returned complex values")
-        try:
-            return np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise FeatureError(f"user function {name!r} must return numbers; got "
-                               f"{type(value).__name__}") from None
-    return call
-
-
-def _reduce(op, fs, Z):
-    out = fs[0](Z)
-    for f in fs[1:]:
-        out = op(out, f(Z))
-    return out
 
 
 def to_data(expr: sp.Expr):

@@ -106,8 +106,9 @@ class Statistics:
     def fit(self, subset, rows=None, bounds=None) -> tuple[np.ndarray, float]:
         """Coefficients ``(k,)`` of the terms ``subset`` and the loss."""
         s = list(subset)
-        xi = solve_constrained(self.gram[np.ix_(s, s)], self.rhs[s], rows, bounds)
-        loss = residual_sum(self.gram[np.ix_(s, s)], self.rhs[s], self.yy, xi)
+        gram, rhs = self.gram[np.ix_(s, s)], self.rhs[s]      # one copy for both (read only)
+        xi = solve_constrained(gram, rhs, rows, bounds)
+        loss = residual_sum(gram, rhs, self.yy, xi)
         return xi, float(loss)
 
     def offset(self, subset, xi) -> float:

@@ -64,7 +64,7 @@ def _etdrk4(model, u0, t, input_at, rtol):
     terms = linear_part(exprs, model.field_names_, grid.names)
     L = np.stack([fourier_symbols(grid, tj) for tj in terms], axis=-1)
     variables = model.setup_.variables
-    jet = SpectralJet(grid, variables)
+    jet = SpectralJet(grid, variables, {s.name for e in exprs for s in e.free_symbols})
     names = variables.names
     compiled = [compile_numpy(e, names, model.feature_library_.user_functions())
                 for e in exprs]

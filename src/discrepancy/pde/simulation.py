@@ -105,17 +105,24 @@ class ETDRK4:
 
 class SpectralJet:
     """The jet variables of fields on a periodic grid straight from their Fourier modes
-    (the hot path of ETDRK4: one inverse transform per derivative)."""
+    (the hot path of ETDRK4: one inverse transform per derivative). ``used``: the names
+    the expressions read (None: all); a derivative order none of them reads is left zero
+    instead of transformed."""
 
-    def __init__(self, grid, variables: FieldVariables):
+    def __init__(self, grid, variables: FieldVariables, used=None):
         self.grid = grid
-        self.multipliers = [fourier_symbols(grid, {alpha: 1.0})[..., None]
-                            for alpha in dict.fromkeys(a for a, _, _ in variables.derivatives)]
+        orders = {}
+        for alpha, _, name in variables.derivatives:
+            orders[alpha] = orders.get(alpha, False) or used is None or name in used
+        self.multipliers = [fourier_symbols(grid, {alpha: 1.0})[..., None] if read else None
+                            for alpha, read in orders.items()]
         self.axes = tuple(range(grid.ndim))
 
     def __call__(self, v: np.ndarray) -> np.ndarray:
         """``(*grid.shape, n * (1 + derivatives))`` from modes ``v`` ``(*rfft shape, n)``."""
-        back = [np.fft.irfftn(m * v, s=self.grid.shape, axes=self.axes)
+        shape = (*self.grid.shape, v.shape[-1])
+        back = [np.zeros(shape) if m is None else
+                np.fft.irfftn(m * v, s=self.grid.shape, axes=self.axes)
                 for m in [1.0, *self.multipliers]]
         return np.concatenate(back, axis=-1)
 

@@ -18,6 +18,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import DataError, ParameterError, ShapeError
+from ..expression_tape import compile_numpy_many
 from ..symbolic import compile_numpy, symbol
 from .base import PAPER_TABLE_1, System, check_physical_parameters
 from .mechanics import lagrange_equations
@@ -124,6 +125,12 @@ def _symbolic_pivot_force():
     return [sp.expand(f.subs(to_state).subs({q[0]: phi1, q[1]: phi2})) for f in (fx, fy)]
 
 
+@cache
+def _paper_parameters() -> DoublePendulumParameters:
+    """The default parameters, built (and checked) once: they are frozen."""
+    return DoublePendulumParameters()
+
+
 class DoublePendulum(System):
     """Mounted double pendulum with viscous joint friction (true system of Section IV.B).
 
@@ -144,7 +151,7 @@ class DoublePendulum(System):
     @property
     def parameters(self) -> DoublePendulumParameters:
         """The parameters in use: ``params``, or the paper's Table 1."""
-        p = self.params if self.params is not None else DoublePendulumParameters()
+        p = self.params if self.params is not None else _paper_parameters()
         if not isinstance(p, DoublePendulumParameters):
             raise ParameterError(f"params must be DoublePendulumParameters; got {type(p).__name__}")
         return p
@@ -159,8 +166,11 @@ class DoublePendulum(System):
         if getattr(self, "_cache_key", None) != key:
             kinetic, potential, _, mass, rest = _symbolic_model()
             subs = self._numbers()
-            exprs = (kinetic, potential, mass[0, 0], mass[0, 1], mass[1, 1], rest[0], rest[1])
-            f = [compile_numpy(e.subs(subs), STATE_NAMES) for e in exprs]
+            exprs = [e.subs(subs) for e in (kinetic, potential, mass[0, 0], mass[0, 1],
+                                            mass[1, 1], rest[0], rest[1])]
+            f = [compile_numpy(e, STATE_NAMES) for e in exprs]
+            # M's entries and b on one tape: their shared sines and cosines once per call
+            self._rhs_terms = compile_numpy_many(exprs[2:], STATE_NAMES)
             self._cache_key, self._functions = key, f
         return self._functions
 
@@ -210,8 +220,8 @@ class DoublePendulum(System):
     def rhs(self, x, u=None) -> np.ndarray:
         """True dynamics ``dx/dt`` ``(m, 4)`` for ``x`` ``(m, 4)``; ``u`` is ignored (no input)."""
         x = self._state(x)
-        _, _, m11, m12, m22, b1, b2 = self._compiled()
-        a, c, d, r1, r2 = m11(x), m12(x), m22(x), b1(x), b2(x)
+        self._compiled()
+        a, c, d, r1, r2 = self._rhs_terms(x)
         det = a * d - c * c
         return np.column_stack([x[:, 2], x[:, 3], (d * r1 - c * r2) / det, (a * r2 - c * r1) / det])
 

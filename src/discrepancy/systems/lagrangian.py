@@ -14,9 +14,10 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ParameterError, ShapeError
+from ..expression_tape import compile_numpy_many
 from ..symbolic import compile_numpy, symbol
 from .base import System
-from .mass_checks import check_kinetic, evaluate_mass, solve_mass
+from .mass_checks import check_kinetic, solve_mass
 from .mechanics import lagrange_equations
 
 
@@ -114,9 +115,9 @@ class LagrangianSystem(System):
                 dissipation=self.dissipation if friction else sp.S.Zero, forces=self.forces,
                 simplify=False)
             names = (*self.state_names, *self.input_names)
-            self._compiled[friction] = ([[compile_numpy(e, names) for e in row]
-                                         for row in mass.tolist()],
-                                        [compile_numpy(e, names) for e in rest])
+            # one tape: the entries of M and b share their sines and cosines
+            self._compiled[friction] = compile_numpy_many(
+                [e for row in mass.tolist() for e in row] + list(rest), names)
         return self._compiled[friction]
 
     def _states(self, x) -> np.ndarray:
@@ -135,9 +136,11 @@ class LagrangianSystem(System):
             if u is None:
                 raise ShapeError(f"u is required: (m, {r}) = {list(self.input_names)}")
             z = np.hstack([x, np.broadcast_to(np.asarray(u, float).reshape(-1, r), (m, r))])
-        mass, rest = self._functions(friction)
-        matrix = evaluate_mass(mass, z)
-        b = np.stack([np.broadcast_to(f(z), (m,)) for f in rest], axis=-1)
+        k = len(self.position_names)
+        values = [v if v.shape == (m,) else np.broadcast_to(v, (m,))
+                  for v in self._functions(friction)(z)]
+        matrix = np.stack(values[:k * k], axis=-1).reshape(m, k, k)
+        b = np.stack(values[k * k:], axis=-1)
         acc = solve_mass(matrix, b, x, self.state_names)
         return np.hstack([x[:, len(self.position_names):], acc])
 

@@ -41,7 +41,7 @@ SEEDS_FULL, SEEDS_QUICK = (1, 2, 3, 4, 5), (1, 2, 3)
 def true_rhs(x, u, push):
     """The simulated system's ``x'`` for states ``(m, 2)``, inputs and pushes ``(m,)``."""
     pos, vel = x[:, 0], x[:, 1]
-    return np.c_[vel, -pos - 0.1 * vel + u - 0.3 * vel - 0.5 * pos ** 3 + push]
+    return np.column_stack((vel, -pos - 0.1 * vel + u - 0.3 * vel - 0.5 * pos ** 3 + push))
 
 
 def record(seed: int, duration: float, *, push_std=PUSH_STD, process_noise=PROCESS_NOISE):
