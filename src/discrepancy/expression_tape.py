@@ -1,5 +1,6 @@
 """Sympy expressions evaluated on numpy rows by a flat tape of steps (what
-:func:`~discrepancy.symbolic.compile_numpy` and :func:`compile_numpy_many` return).
+:func:`~discrepancy.symbolic.compile_numpy` and
+:func:`~discrepancy.expression_tape.compile_numpy_many` return).
 
 A tree walk compiles the expressions once into a list of steps, each one numpy call on the
 values of earlier steps: a subexpression that occurs several times (in one expression or
