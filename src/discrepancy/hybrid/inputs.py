@@ -27,6 +27,8 @@ from ..errors import DataError, ParameterError, ShapeError
 
 #: how an input is held between its samples (``u_hold=``)
 HOLDS = ("linear", "zoh", "bandlimited")
+#: the hold of simulations and output-error fits when none is given
+DEFAULT_HOLD = "linear"
 #: fine-grid factor used to evaluate a band-limited input at arbitrary times
 BANDLIMITED_OVERSAMPLING = 16
 

@@ -45,7 +45,7 @@ from ..constraints import Integral, Interval, check_argument
 from ..data.trajectory import as_trajectories
 from ..errors import ConvergenceError, ParameterError, describe
 from ..fitting.setup import resolve_names
-from ..hybrid.inputs import HOLDS
+from ..hybrid.inputs import DEFAULT_HOLD, HOLDS
 from ..hybrid.outputs import OutputMap
 from ..libraries import FeatureLibrary
 from ..models import DiscrepancyModel
@@ -55,9 +55,6 @@ from ..selection.candidate_libraries import default_libraries
 from ..selection.choice import TOLERANCE
 from .judges import FIRST_ORIGIN, HORIZON_SHARE, StateForecasts
 from .output_forecasts import OutputForecasts
-
-#: the input hold of ``fit_outputs`` when none is given (round 3 tries the others)
-DEFAULT_HOLD = "linear"
 
 
 @dataclass
@@ -135,9 +132,10 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
         contest.enter(_joined(templates, contest.scores, names), "joined")
     if outputs is not None and records[0].u is not None and "u_hold" not in fit_kws:
         pick = contest.pick()
-        contest.enter({f"{pick}, u_hold={hold}": contest.entries[pick][0]
-                       for hold in HOLDS if hold != DEFAULT_HOLD}, "input hold",
-                      holds=[h for h in HOLDS if h != DEFAULT_HOLD])
+        for hold in HOLDS:
+            if hold != DEFAULT_HOLD:
+                contest.enter({f"{pick}, u_hold={hold}": contest.entries[pick][0]},
+                              "input hold", {**fit_kws, "u_hold": hold})
     pick = contest.pick()
     template, settings = contest.entries[pick]
     final = contest.judge(settings).fit(template, 1.0)
@@ -154,7 +152,6 @@ class _Contest:
         self.horizon, self.fractions = horizon, fractions
         self.disable = None if progress is None else not progress
         self.entries, self.scores, self._judges = {}, {}, {}
-        self._hold = fit_kws.get("u_hold", DEFAULT_HOLD)
 
     def judge(self, settings):
         key = settings.get("u_hold")
@@ -164,13 +161,12 @@ class _Contest:
                                  StateForecasts(self.records, settings, self.horizon))
         return self._judges[key]
 
-    def enter(self, templates, round_name, holds=None):
-        """Score ``templates`` (name -> unfitted model); ``holds``: each one's ``u_hold``."""
-        holds = [None] * len(templates) if holds is None else holds
-        items = list(zip(templates.items(), holds, strict=True))
-        for (name, template), hold in tqdm(items, desc=f"procedures ({round_name})",
-                                           disable=self.disable):
-            settings = self.fit_kws if hold is None else {**self.fit_kws, "u_hold": hold}
+    def enter(self, templates, round_name, settings=None):
+        """Score ``templates`` (name -> unfitted model), fitted with ``settings`` (default
+        the ``fit_kws`` given)."""
+        settings = self.fit_kws if settings is None else settings
+        for name, template in tqdm(list(templates.items()), desc=f"procedures ({round_name})",
+                                   disable=self.disable):
             judge, errors = self.judge(settings), []
             for f in self.fractions:
                 errors.append(judge.score(template, f))
@@ -193,7 +189,8 @@ class _Contest:
         margin = np.maximum(np.nan_to_num(se, nan=0.0), TOLERANCE * mean[finite].min())
         # simplest first: fewest terms, then the default input hold
         sizes = [(self.scores[k]["n_terms"],
-                  self.entries[k][1].get("u_hold", DEFAULT_HOLD) != self._hold) for k in names]
+                  self.entries[k][1].get("u_hold", DEFAULT_HOLD) != DEFAULT_HOLD)
+                 for k in names]
         return names[one_standard_error(mean, margin, sizes)]
 
 

@@ -21,6 +21,7 @@ import warnings
 import numpy as np
 
 from ..errors import ConvergenceError
+from ..hybrid.inputs import DEFAULT_HOLD
 from ..hybrid.outputs import OutputMap
 from ..models.outputs.output_checks import simulate_quietly
 from ..models.outputs.output_fit import refit_outputs
@@ -70,7 +71,7 @@ class OutputForecasts(Judge):
             cut = int(round(rec.n_samples * fraction))
             try:
                 sim = out_map(simulate_quietly(model, x0, rec, self.fit_kws.get("substeps", 4),
-                                        self.fit_kws.get("u_hold", "linear")))
+                                        self.fit_kws.get("u_hold", DEFAULT_HOLD)))
             except ConvergenceError:
                 return float("inf")
             squares.append((((sim - rec.x) / self.scale)[cut:]) ** 2)
@@ -83,7 +84,7 @@ def _refitted(first, y, t, u, outputs, fit_kws):
     coefficients and the initial states refitted on ``y`` by one output-error solve,
     starting from its own."""
     one = len(y) == 1        # one record: as arrays, as it was fitted
-    kw = {"x0_bounds": None, "u_hold": "linear", "substeps": 4,
+    kw = {"x0_bounds": None, "u_hold": DEFAULT_HOLD, "substeps": 4,
           **{k: v for k, v in fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}}
     coef, x0s, _ = refit_outputs(first, y[0] if one else y, t[0] if one else t,
                                  None if u is None else (u[0] if one else u),
