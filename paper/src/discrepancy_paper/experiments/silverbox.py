@@ -91,8 +91,9 @@ def run(out_dir, *, quick: bool = False):
              "multisine (last quarter)": multisine_test}
     n_blind = min(BLIND_SAMPLES, len(y)) // (4 if quick else 1)
     blind = _blind(prior, y[:n_blind], t[:n_blind], u[:n_blind], not quick)
-    settings = {**BLIND, **blind["choice"].settings}      # with the chosen input hold
-    blind["scores"] = {name: _test(blind["choice"].model, u_all[idx], y_all[idx], settings)
+    blind["settings"] = {**BLIND, **blind["choice"].settings}   # with the chosen input hold
+    blind["scores"] = {name: _test(blind["choice"].model, u_all[idx], y_all[idx],
+                                   blind["settings"])
                        for name, idx in tests.items()}
     model = dc.DiscrepancyModel(
         prior=prior, state_names=["y", "v"], input_names=["u"],
@@ -132,7 +133,7 @@ def _blind(prior, y, t, u, full):
 def _write_blind(rep, blind, tuned_scores, n_blind, full):
     from discrepancy.plots.selection import procedure_figure
 
-    settings = {**BLIND, **blind["choice"].settings}
+    settings = blind["settings"]
     choice, scores = blind["choice"], blind["scores"]
     arrow = scores["arrow (full)"]
     rep.text("## Blind procedure (nothing chosen after seeing test data)")
