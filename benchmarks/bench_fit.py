@@ -20,7 +20,7 @@ from threadpoolctl import threadpool_limits
 import discrepancy as dc
 import discrepancy.fitting.accumulate as accumulate_module
 from discrepancy.data.trajectory import as_trajectories
-from discrepancy.fitting.accumulate import BLOCK_ROWS, _single_threaded_blas, default_threads
+from discrepancy.fitting.accumulate import BLOCK_ROWS, default_threads, single_threaded_blas
 
 warnings.filterwarnings("ignore")
 
@@ -59,7 +59,7 @@ def profile(xs, xds, reps=5):
     model.fit(xs, t=DT, x_dot=xds)
     stats = model.statistics_
     big = np.asfortranarray(np.random.default_rng(0).standard_normal((65536, p)))
-    with _single_threaded_blas():
+    with single_threaded_blas():
         phases = {
             "validation (as_trajectories)": median_time(
                 lambda: as_trajectories(xs, DT, None, xds), reps)[0],
