@@ -6,7 +6,7 @@ stops at a state that fits the window badly, and a simulation from there carries
 error through the whole record. So every fit of initial states starts from several
 candidates and keeps, per record, the one whose fitted state reproduces the outputs best:
 
-* ``given``: the caller's ``x0``; ``previous``: the model's own estimate ``x0_``;
+* ``given``: the caller's ``x0``;
 * ``measured``: measured states at their first sample, the others 0;
 * ``signs``: the unmeasured states at plus and minus the outputs' typical size;
 * ``inverse``: for outputs that are expressions of the states, solutions of
@@ -25,6 +25,7 @@ import warnings
 import numpy as np
 
 from ...errors import InitialStateWarning
+from .output_error import initial_states, output_size, signed_starts
 
 #: RMS error of the best start, relative to the outputs' spread, above which it warns
 POOR_FIT = 0.25
@@ -34,9 +35,9 @@ SCREENING_EVALUATIONS = 30
 NEWTON_ITERATIONS = 50
 
 
-def candidates(fit, coef, *, given=None, previous=None) -> list[tuple[str, np.ndarray]]:
+def candidates(fit, coef, *, given=None) -> list[tuple[str, np.ndarray]]:
     """``[(label, x0s (records, n)), ...]`` to start the fit of initial states from."""
-    guess = np.array([fit.out_map.initial_guess(r.y[0]) for r in fit.records])
+    guess = initial_states(None, fit.records, fit.out_map, fit.n)
     base = guess if given is None else given
     out = [] if given is None else [("given", given)]
     out.append(("measured", guess))
@@ -44,11 +45,7 @@ def candidates(fit, coef, *, given=None, previous=None) -> list[tuple[str, np.nd
         out.append(("inverse", x0s))
     hidden = sorted(set(range(fit.n)) - fit.out_map.measured)
     if hidden:
-        size = float(np.mean([np.abs(r.y).mean() for r in fit.records])) or 1.0
-        for sign in (1.0, -1.0):
-            other = base.copy()
-            other[:, hidden] = sign * size
-            out.append(("signs", other))
+        out += [("signs", x0s) for x0s in signed_starts(fit, base, hidden)]
     steady = _steady_states(fit, coef, base)
     if steady is not None:
         out.append(("steady state", steady))
@@ -56,8 +53,6 @@ def candidates(fit, coef, *, given=None, previous=None) -> list[tuple[str, np.nd
             mixed = base.copy()
             mixed[:, hidden] = steady[:, hidden]
             out.append(("steady state (unmeasured states)", mixed))
-    if previous is not None:
-        out.append(("previous", previous))
     unique = []
     for label, x0s in out:
         x0s = np.clip(x0s, *fit.bounds)
@@ -66,36 +61,35 @@ def candidates(fit, coef, *, given=None, previous=None) -> list[tuple[str, np.nd
     return unique
 
 
-def best_start(fit, coef, rows, starts, *, max_evaluations: int = 200):
+def best_start(fit, coef, rows, starts):
     """Fit the initial states (``coef`` held, ``fit.fixed`` set to it) from every start,
     each for at most :data:`SCREENING_EVALUATIONS`; per record, the fitted state with the
     smallest output error, refined to convergence. Returns ``(x0s, labels, rms (records,
     k))``."""
     none = np.zeros((fit.n, fit.p), bool)
     fit.fixed = coef
-    best_x0, labels, best_score = None, None, None
+    best_x0, labels, best_rms = None, None, None
     for label, start in starts:
         _, screened, _ = fit.solve(none, coef, start, rows, 0.0,
-                                   max_evaluations=min(SCREENING_EVALUATIONS,
-                                                       max_evaluations))
-        score = _scores(fit, coef, screened)
+                                   max_evaluations=SCREENING_EVALUATIONS)
+        rms = fit.record_errors(coef, screened)
         if best_x0 is None:
-            best_x0, labels, best_score = screened.copy(), [label] * len(score), score
+            best_x0, labels, best_rms = screened.copy(), [label] * len(rms), rms
             continue
-        better = score < best_score
-        best_x0[better] = screened[better]
-        best_score = np.where(better, score, best_score)
+        better = _score(fit, rms) < _score(fit, best_rms)
+        best_x0[better], best_rms[better] = screened[better], rms[better]
         labels = [label if b else old for b, old in zip(better, labels, strict=True)]
-    _, solution, _ = fit.solve(none, coef, best_x0, rows, 0.0,
-                               max_evaluations=max_evaluations)
-    better = _scores(fit, coef, solution) <= best_score
-    best_x0[better] = solution[better]
-    return best_x0, labels, fit.record_errors(coef, best_x0)
+    _, solution, _ = fit.solve(none, coef, best_x0, rows, 0.0)
+    rms = fit.record_errors(coef, solution)
+    better = _score(fit, rms) <= _score(fit, best_rms)
+    best_x0[better], best_rms[better] = solution[better], rms[better]
+    return best_x0, labels, best_rms
 
 
-def _scores(fit, coef, x0s) -> np.ndarray:
-    """Mean squared scaled output error of each record ``(records,)`` (inf if diverged)."""
-    score = np.mean((fit.record_errors(coef, x0s) / fit.y_scale) ** 2, axis=1)
+def _score(fit, rms) -> np.ndarray:
+    """Mean squared scaled output error of each record ``(records,)`` from its RMS errors
+    ``(records, k)`` (inf if diverged)."""
+    score = np.mean((rms / fit.y_scale) ** 2, axis=1)
     return np.where(np.isfinite(score), score, np.inf)
 
 
@@ -123,7 +117,7 @@ def _inverse(fit, guess) -> list[np.ndarray]:
     measured = sorted(fit.out_map.measured)
     if not measured or len(measured) > 3:
         return []
-    size = float(np.mean([np.abs(r.y).mean() for r in fit.records])) or 1.0
+    size = output_size(fit)
     found = []
     for signs in itertools.product((1.0, -1.0), repeat=len(measured)):
         x0s = guess.copy()

@@ -280,6 +280,22 @@ def n_states_of(model, x0) -> int:
                          "list of sympy expressions, or x0")
 
 
+def output_size(fit) -> float:
+    """The outputs' typical size: their mean absolute value over the records (1 if all 0)."""
+    return float(np.mean([np.abs(r.y).mean() for r in fit.records])) or 1.0
+
+
+def signed_starts(fit, base, states) -> list[np.ndarray]:
+    """``base`` ``(records, n)`` with ``states`` at plus and at minus :func:`output_size`
+    (a state at 0 can be a fixed point a fit cannot leave)."""
+    starts = []
+    for sign in (1.0, -1.0):
+        x0s = base.copy()
+        x0s[:, states] = sign * output_size(fit)
+        starts.append(x0s)
+    return starts
+
+
 def initial_states(x0, records, out_map, n) -> np.ndarray:
     """``(records, n)`` initial guesses: given, or measured states from the first sample."""
     if x0 is None:

@@ -19,6 +19,7 @@ from .output_error import (
     initial_states,
     n_states_of,
     records_of,
+    signed_starts,
     split_rows,
     warn_if_not_converged,
 )
@@ -112,11 +113,7 @@ def _prior_start(fit, x0s, rows, *, guessed: bool):
     hidden = sorted(set(range(fit.n)) - fit.out_map.measured)
     starts = [x0s]
     if guessed and hidden:
-        size = float(np.mean([np.abs(r.y).mean() for r in fit.records])) or 1.0
-        for sign in (1.0, -1.0):
-            other = x0s.copy()
-            other[:, hidden] = sign * size
-            starts.append(np.clip(other, *fit.bounds))
+        starts += [np.clip(s, *fit.bounds) for s in signed_starts(fit, x0s, hidden)]
     short = all(r.m <= START_WINDOW for r in fit.records)
     window = fit if short else fit.head(START_WINDOW)
     window_rows = rows if short else [w[:START_WINDOW] for w in rows]
