@@ -21,7 +21,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from .errors import ExportError
+from .errors import ExportError, FeatureError
 from .symbolic_functions import FUNCTIONS, NARY_FUNCTIONS, finite_number
 
 
@@ -96,8 +96,6 @@ class _Builder:
 def _user_call(name: str, f: Callable, slots: list[int]) -> Callable:
     """The step ``f(*values of slots)`` for a user's numpy function, its failures named
     (FeatureError)."""
-    from .errors import FeatureError
-
     def call(v, Z):
         try:
             value = f(*[v[s] for s in slots])
@@ -145,7 +143,9 @@ class CompiledExpressions:
         builder = _Builder(names, functions or {})
         self.outputs = [builder.slot(e) for e in exprs]
         self._steps = builder.steps
-        self._repeated = len(set(self.outputs)) < len(self.outputs)
+        # an expression asked for twice gets its own array (a copy) at its later places
+        self._copied = [self.outputs.index(s) != i for i, s in enumerate(self.outputs)]
+        self._repeated = any(self._copied)
         self._source = (list(exprs), list(names), dict(functions) if functions else None)
 
     def __call__(self, Z) -> list[np.ndarray]:
@@ -153,9 +153,9 @@ class CompiledExpressions:
         append = values.append
         for step in self._steps:
             append(step(values, Z))
-        if self._repeated:      # the same expression twice: separate arrays, as asked
-            return [values[s].copy() if self.outputs.index(s) != i else values[s]
-                    for i, s in enumerate(self.outputs)]
+        if self._repeated:
+            return [values[s].copy() if copied else values[s]
+                    for s, copied in zip(self.outputs, self._copied, strict=True)]
         return [values[s] for s in self.outputs]
 
     def __reduce__(self):

@@ -117,11 +117,11 @@ class SpectralJet:
         self.multipliers = [fourier_symbols(grid, {alpha: 1.0})[..., None] if read else None
                             for alpha, read in orders.items()]
         self.axes = tuple(range(grid.ndim))
+        self.zero = np.zeros((*grid.shape, len(variables.fields)))   # an order not read
 
     def __call__(self, v: np.ndarray) -> np.ndarray:
         """``(*grid.shape, n * (1 + derivatives))`` from modes ``v`` ``(*rfft shape, n)``."""
-        shape = (*self.grid.shape, v.shape[-1])
-        back = [np.zeros(shape) if m is None else
+        back = [self.zero if m is None else
                 np.fft.irfftn(m * v, s=self.grid.shape, axes=self.axes)
                 for m in [1.0, *self.multipliers]]
         return np.concatenate(back, axis=-1)

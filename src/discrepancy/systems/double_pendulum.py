@@ -160,6 +160,8 @@ class DoublePendulum(System):
         return {symbol(k): v for k, v in self.parameters.as_dict().items()}
 
     def _compiled(self):
+        """``(kinetic, potential, rhs_terms)`` compiled for these parameters: ``T``, ``V``
+        and (on one tape, their shared sines and cosines once per call) M's entries and b."""
         # frozen parameters compare by value (building a dict of symbols as the key cost most
         # of a right-hand side's call)
         key = self.parameters
@@ -168,10 +170,10 @@ class DoublePendulum(System):
             subs = self._numbers()
             exprs = [e.subs(subs) for e in (kinetic, potential, mass[0, 0], mass[0, 1],
                                             mass[1, 1], rest[0], rest[1])]
-            f = [compile_numpy(e, STATE_NAMES) for e in exprs]
-            # M's entries and b on one tape: their shared sines and cosines once per call
-            self._rhs_terms = compile_numpy_many(exprs[2:], STATE_NAMES)
-            self._cache_key, self._functions = key, f
+            self._functions = (compile_numpy(exprs[0], STATE_NAMES),
+                               compile_numpy(exprs[1], STATE_NAMES),
+                               compile_numpy_many(exprs[2:], STATE_NAMES))
+            self._cache_key = key
         return self._functions
 
     def _state(self, x) -> np.ndarray:
@@ -207,7 +209,7 @@ class DoublePendulum(System):
         opposite force: its dynamic part is what shakes the table under the rig.
         """
         x = self._state(x)
-        key = tuple(self._numbers().values())
+        key = self.parameters
         if getattr(self, "_pivot_key", None) != key:
             subs = self._numbers()
             names = (*STATE_NAMES, "ddphi1", "ddphi2")
@@ -220,8 +222,7 @@ class DoublePendulum(System):
     def rhs(self, x, u=None) -> np.ndarray:
         """True dynamics ``dx/dt`` ``(m, 4)`` for ``x`` ``(m, 4)``; ``u`` is ignored (no input)."""
         x = self._state(x)
-        self._compiled()
-        a, c, d, r1, r2 = self._rhs_terms(x)
+        a, c, d, r1, r2 = self._compiled()[2](x)
         det = a * d - c * c
         return np.column_stack([x[:, 2], x[:, 3], (d * r1 - c * r2) / det, (a * r2 - c * r1) / det])
 
