@@ -17,7 +17,7 @@ from ..errors import ParameterError, ShapeError
 from ..expression_tape import compile_numpy_many
 from ..symbolic import compile_numpy, symbol
 from .base import System
-from .mass_checks import check_kinetic, solve_mass
+from .mass_checks import check_kinetic, solve_mass, stack_mass
 from .mechanics import lagrange_equations
 
 
@@ -137,10 +137,9 @@ class LagrangianSystem(System):
                 raise ShapeError(f"u is required: (m, {r}) = {list(self.input_names)}")
             z = np.hstack([x, np.broadcast_to(np.asarray(u, float).reshape(-1, r), (m, r))])
         k = len(self.position_names)
-        values = [v if v.shape == (m,) else np.broadcast_to(v, (m,))
-                  for v in self._functions(friction)(z)]
-        matrix = np.stack(values[:k * k], axis=-1).reshape(m, k, k)
-        b = np.stack(values[k * k:], axis=-1)
+        values = self._functions(friction)(z)
+        matrix = stack_mass(values, k, m)
+        b = np.stack([np.broadcast_to(v, (m,)) for v in values[k * k:]], axis=-1)
         acc = solve_mass(matrix, b, x, self.state_names)
         return np.hstack([x[:, len(self.position_names):], acc])
 

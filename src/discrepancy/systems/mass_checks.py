@@ -15,7 +15,8 @@ import numpy as np
 import sympy as sp
 
 from ..errors import DataError, ParameterError
-from ..symbolic import compile_numpy, symbol
+from ..expression_tape import compile_numpy_many
+from ..symbolic import symbol
 
 #: random states ``M`` is checked at (positions and rates uniform in [-3, 3])
 N_CHECKS = 16
@@ -30,8 +31,8 @@ def check_kinetic(kinetic: sp.Expr, coordinates: Sequence[str], rates: Sequence[
     rng = np.random.default_rng(0)
     states = rng.uniform(-3, 3, (N_CHECKS, 2 * k))
     with np.errstate(all="ignore"):
-        matrices = evaluate_mass([[compile_numpy(mass[i, j], names) for j in range(k)]
-                                  for i in range(k)], states)
+        entries = compile_numpy_many([e for row in mass.tolist() for e in row], names)
+        matrices = stack_mass(entries(states), k, len(states))
     for m, state in zip(matrices, states, strict=True):
         where = ", ".join(f"{n}={v:.3g}" for n, v in zip(names, state, strict=True))
         bad = [i for i in range(k) if not np.isfinite(m[i]).all()]
@@ -53,11 +54,11 @@ def check_kinetic(kinetic: sp.Expr, coordinates: Sequence[str], rates: Sequence[
                 f"{weakest!r}); T must be positive for every motion")
 
 
-def evaluate_mass(functions, z: np.ndarray) -> np.ndarray:
-    """``M`` ``(m, k, k)`` of the compiled entries ``functions[i][j]`` on rows ``z``."""
-    m = len(z)
-    return np.stack([np.stack([np.broadcast_to(f(z), (m,)) for f in row], axis=-1)
-                     for row in functions], axis=-2)
+def stack_mass(values, k: int, m: int) -> np.ndarray:
+    """``M`` ``(m, k, k)`` from the values of its entries in row-major order, each ``(m,)``
+    or one number for every row."""
+    return np.stack([np.broadcast_to(v, (m,)) for v in values[:k * k]],
+                    axis=-1).reshape(m, k, k)
 
 
 def solve_mass(matrix: np.ndarray, b: np.ndarray, x: np.ndarray, state_names) -> np.ndarray:
