@@ -8,8 +8,11 @@ augmented by the disturbance states of
 measurement noise ``R = diag(r²)``. One step of the extended Kalman filter
 (:mod:`~discrepancy.estimation.kalman_math`) is written once in CasADi symbols with
 ``(Ξ, q, r)`` as inputs and ``mapaccum`` runs ``BLOCK`` samples per call; a record's
-objective is an MX graph of its blocks with the data as constants, so its gradient costs
-about three evaluations of the filter whatever the number of parameters. The EKF's
+objective is an MX graph of its blocks with the data as inputs, so its gradient costs
+about three evaluations of the filter whatever the number of parameters. From
+:data:`COMPILE_SAMPLES` samples the graph is compiled to C
+(:func:`~discrepancy.hybrid.codegen.compiled`; the data are inputs, so the source is small
+and a second fit of the same support and record sizes loads it from the cache). The EKF's
 covariance depends on the model's Jacobian, so the gradient needs second derivatives of
 ``f``: CasADi takes them from the same expressions.
 """
@@ -20,10 +23,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..hybrid.casadi_form import casadi_module, library_columns, prior_expression
+from ..hybrid.codegen import compiled
 from .backends import CasadiOps
 from .compiled import BLOCK, flat_update, layout, run_blocks, step_expressions
 from .disturbances import augment_casadi
 from .dynamics import check_points
+
+#: samples (over all records) from which an objective is compiled to C. Measured on the
+#: prediction-error experiment's oscillator (3 filter states): an evaluation with its gradient
+#: costs about 30-40 us per sample in CasADi's virtual machine and 3 us compiled, compiling
+#: one objective about 1 s (0.3 s at -O0), and a fit evaluates each support's objective 15 to
+#: 20 times, so compiling pays from about 1,000 samples, sooner when fits repeat (the cache
+#: holds one library per support and record size). Whole fits, CPU with the compiler, cold
+#: cache: 6000 samples 42 s -> 28 s, the quick experiment's 1500-sample records 43 s -> 26 s,
+#: identical coefficients. Both costs grow with the filter's size, so the break-even in
+#: samples hardly depends on the model
+COMPILE_SAMPLES = 1000
 
 
 @dataclass
@@ -78,25 +93,32 @@ class InnovationLikelihood:
             "filter_nll", BLOCK)
         self.sizes = layout(self.N, self.k, r, substeps)
 
-    def objective(self, records: list[LikelihoodRecord]):
-        """CasADi Function ``(ξ (support), q (N), r (k)) -> (mean nll, its gradient)`` over
-        the weighted samples of ``records`` (the mean over their total weight)."""
+    def objective(self, records: list[LikelihoodRecord], *, compile: bool | None = None):
+        """The mean negative log-likelihood over the weighted samples of ``records`` (the
+        mean over their total weight) and its gradient, as an :class:`Objective`
+        ``(ξ (support), q (N), r (k)) -> (value, gradient)``; compiled to C when ``compile``
+        is True, or when None and the records hold :data:`COMPILE_SAMPLES` samples."""
         ca = casadi_module()
         xi, q, r = ca.MX.sym("xi", int(self.support.sum())), ca.MX.sym("q", self.N), \
             ca.MX.sym("r", self.k)
-        total, weight = 0, sum(float(rec.weights.sum()) for rec in records)
-        for rec in records:
-            columns, weights = _padded(rec.data, rec.weights)
-            carry = ca.MX(ca.DM(np.concatenate([rec.x0, rec.P0.ravel(order="F")])))
+        total, weight = ca.MX(0), sum(float(rec.weights.sum()) for rec in records)
+        inputs, values = [], []
+        for j, rec in enumerate(records):
+            columns, weights = _used_blocks(rec.data, rec.weights)
+            data, w = ca.MX.sym(f"data{j}", *columns.shape), ca.MX.sym(f"w{j}", len(weights))
+            carry = ca.MX.sym(f"start{j}", self.N + self.N ** 2)
+            inputs += [data, w, carry]
+            values += [columns, weights, np.concatenate([rec.x0, rec.P0.ravel(order="F")])]
             for i in range(0, columns.shape[1], BLOCK):
-                if not weights[i:].any():
-                    break
-                after, nll = self._nll(carry, ca.DM(columns[:, i:i + BLOCK]), xi, q, r)
-                total = total + ca.mtimes(nll, ca.DM(weights[i:i + BLOCK]))
+                after, nll = self._nll(carry, data[:, i:i + BLOCK], xi, q, r)
+                total = total + ca.mtimes(nll, w[i:i + BLOCK])
                 carry = after[:, -1]
         total = total / max(weight, 1.0)
         grads = ca.gradient(total, ca.vertcat(xi, q, r))
-        return ca.Function("objective", [xi, q, r], [total, grads])
+        function = ca.Function("likelihood_objective", [xi, q, r, *inputs], [total, grads])
+        if compile is None:
+            compile = sum(len(v) for v in values[1::3]) >= COMPILE_SAMPLES
+        return Objective(compiled(function, enabled=compile), values)
 
     def run(self, record: LikelihoodRecord, coef, q, r):
         """Step outputs and predictions of the filter over ``record`` (numeric), as
@@ -108,11 +130,27 @@ class InnovationLikelihood:
                           self.sizes["out"], extra)
 
 
-def _padded(data, weights):
+class Objective:
+    """An objective bound to its records' data: ``objective(ξ, q, r)`` returns CasADi's
+    ``(value, gradient)``; ``function`` is the CasADi Function (compiled or not) whose
+    inputs after ``(ξ, q, r)`` are ``data``."""
+
+    def __init__(self, function, data: list[np.ndarray]):
+        self.function, self.data = function, data
+
+    def __call__(self, xi, q, r):
+        return self.function(xi, q, r, *self.data)
+
+
+def _used_blocks(data, weights):
+    """The record's data as columns ``(d, L)`` and its weights ``(L,)``, zero-padded to
+    whole blocks and cut after the last block with a weighted sample."""
     m = len(data)
-    padded = -(-m // BLOCK) * BLOCK
+    last = np.flatnonzero(weights)
+    used = 0 if not len(last) else -(-(int(last[-1]) + 1) // BLOCK) * BLOCK
+    padded = max(used, -(-m // BLOCK) * BLOCK)
     columns = np.zeros((data.shape[1], padded))
     columns[:, :m] = data.T
     w = np.zeros(padded)
     w[:m] = weights
-    return columns, w
+    return columns[:, :used], w[:used]

@@ -57,6 +57,12 @@ class PredictionErrorMethods:
         :class:`~discrepancy.estimation.pem.PredictionErrorFit`: the scored path, the
         choice, the fit's negative log-likelihood per sample); :meth:`kalman_filter`
         gives the filter of the fitted model with these noise levels.
+
+        From :data:`~discrepancy.estimation.likelihood.COMPILE_SAMPLES` samples the
+        likelihood is compiled to C (about ten times faster per evaluation; the libraries
+        are cached, see :mod:`~discrepancy.hybrid.codegen`); without a C compiler it runs in
+        CasADi's virtual machine with the same results and a
+        :class:`~discrepancy.errors.CompilationWarning`.
         """
         keywords_only("fit_prediction_error", args, "u, outputs and the options")
         self._validate_params()
