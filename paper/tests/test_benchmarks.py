@@ -28,8 +28,9 @@ def test_cascaded_tanks_beats_the_bar_with_few_terms(tmp_path):
 
 @pytest.mark.slow
 def test_silverbox_arrow_within_a_millivolt_simulated_fast(tmp_path):
-    """The quick run (8000 estimation samples, the arrow's first 10 000; the whole arrow
-    is `discrepancy reproduce silverbox`): the issue's 1 mV bar and the prior alone."""
+    """The quick run (8000 estimation samples, the arrow's first 10 000, the band-limited
+    input hold the only one tried besides the default; the whole arrow and every hold are
+    `discrepancy reproduce silverbox`): the issue's 1 mV bar and the prior alone."""
     folder = get_experiment("silverbox")(tmp_path, quick=True)
     results = json.loads((folder / "results.json").read_text())
     assert results["quick"] and results["arrow_samples"] == 10_000
@@ -43,6 +44,8 @@ def test_silverbox_arrow_within_a_millivolt_simulated_fast(tmp_path):
     # the issue's 1 mV bar for the blind procedure too (0.53 mV on this shortened arrow
     # with the band-limited hold it chooses)
     assert results["blind_procedure"]["test_rms_error_mV"] <= 1.0
+    holds = [k for k in results["blind_procedure"]["candidate_scores"] if "u_hold" in k]
+    assert [k.split("u_hold=")[1] for k in holds] == ["bandlimited"]
 
 
 def check_blind_first(folder, results, error_key):
