@@ -50,7 +50,7 @@ def cart_task() -> SwingUpTask:
 
 def run(out_dir, *, quick: bool = False, verbose=None):
     """Write ``out_dir/cart-mpc/``; ``quick``: 2 perturbed cases (the first two of
-    the 50), learning on one system, a 10 frames/s GIF."""
+    the 50), learning on one system, a 5 frames/s GIF."""
     from .cart_mpc_report import write
     from .report import Report
 
