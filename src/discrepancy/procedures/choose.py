@@ -114,9 +114,10 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
         fit_kws: further keyword arguments of ``fit`` or ``fit_outputs``. With outputs and
             inputs, a ``u_hold`` left out here is chosen too (module doc).
         join: also score the union of the two libraries that forecast best (module doc).
-        holds: the input holds the last round tries besides the default one (default every
-            one of :data:`~discrepancy.hybrid.inputs.HOLDS`); fewer save run time where a
-            hold is known not to suit the data (e.g. a quick test).
+        holds: the input holds the last round may try (default every one of
+            :data:`~discrepancy.hybrid.inputs.HOLDS`; the default hold, the candidates' own,
+            is always scored); fewer save run time where a hold is known not to suit the
+            data (e.g. a quick test).
     """
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
     check_argument("n_origins", n_origins, Interval(Integral, 2))

@@ -32,7 +32,7 @@ SHOWN = ((1, "strong Stribeck", 0), (2, "viscous + Coulomb", 1), (3, "viscous + 
 QUICK = ((1, "viscous + Coulomb", 0),)
 #: integration tolerance of quick (test) runs (the experiments' 1e-10 costs a third more
 #: CPU): the quick recording's states move by 3e-5 rad/s at most, 31 of its 38 238 encoder
-#: readings by a count, its fitted law's coefficients by 2e-5 of themselves
+#: readings by a count, its fitted law's coefficients by 3e-5 of themselves
 QUICK_TOLERANCE = 1e-8
 HELD_OUT = tuple((links, family, 100) for links in (1, 2, 3) for family in FAMILIES)
 
