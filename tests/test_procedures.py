@@ -140,6 +140,9 @@ def test_candidates_are_checked():
     with pytest.raises(dc.errors.ParameterError, match="n_origins"):
         dc.choose_procedure(dc.DiscrepancyModel(prior=oscillator), np.ones((100, 2)),
                             n_origins=1)
+    with pytest.raises(dc.errors.ParameterError, match="holds"):
+        dc.choose_procedure(dc.DiscrepancyModel(prior=oscillator), np.ones((100, 2)),
+                            holds=("linear", "sinc"))
 
 
 def test_procedure_figure_has_one_column_per_candidate(friction_records):

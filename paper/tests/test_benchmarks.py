@@ -13,8 +13,9 @@ pytest.importorskip("casadi")
 
 @pytest.mark.slow
 def test_cascaded_tanks_beats_the_bar_with_few_terms(tmp_path):
-    """The quick run (the blind procedure scores the linear candidate and the prior alone;
-    every default one runs in `discrepancy reproduce cascaded-tanks`)."""
+    """The quick run (the blind procedure scores the linear candidate and the prior alone
+    from two origins; every default one, from three, runs in `discrepancy reproduce
+    cascaded-tanks`)."""
     folder = get_experiment("cascaded-tanks")(tmp_path, quick=True)
     results = json.loads((folder / "results.json").read_text())
     assert results["number_of_terms"] <= 10
@@ -28,8 +29,9 @@ def test_cascaded_tanks_beats_the_bar_with_few_terms(tmp_path):
 
 @pytest.mark.slow
 def test_silverbox_arrow_within_a_millivolt_simulated_fast(tmp_path):
-    """The quick run (8000 estimation samples, the arrow's first 10 000; the whole arrow
-    is `discrepancy reproduce silverbox`): the issue's 1 mV bar and the prior alone."""
+    """The quick run (8000 estimation samples, the arrow's first 10 000, the band-limited
+    input hold the only one tried besides the default; the whole arrow and every hold are
+    `discrepancy reproduce silverbox`): the issue's 1 mV bar and the prior alone."""
     folder = get_experiment("silverbox")(tmp_path, quick=True)
     results = json.loads((folder / "results.json").read_text())
     assert results["quick"] and results["arrow_samples"] == 10_000
@@ -43,6 +45,8 @@ def test_silverbox_arrow_within_a_millivolt_simulated_fast(tmp_path):
     # the issue's 1 mV bar for the blind procedure too (0.53 mV on this shortened arrow
     # with the band-limited hold it chooses)
     assert results["blind_procedure"]["test_rms_error_mV"] <= 1.0
+    holds = [k for k in results["blind_procedure"]["candidate_scores"] if "u_hold" in k]
+    assert [k.split("u_hold=")[1] for k in holds] == ["bandlimited"]
 
 
 def check_blind_first(folder, results, error_key):

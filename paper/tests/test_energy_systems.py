@@ -9,8 +9,11 @@ from discrepancy_paper.experiments import energy_recordings, energy_systems
 
 
 def test_recordings_lose_energy_to_the_drawn_friction_only():
-    """The true system's energy falls by exactly the integral of the drawn laws' power."""
-    rec = energy_recordings.simulate(1, "viscous + Coulomb", 0)
+    """The true system's energy falls by exactly the integral of the drawn laws' power (at
+    the quick runs' tolerance, 1e-8, the recording the quick run below reads: the balance
+    holds to 2.3e-7 of the energy's range there, 1.7e-7 at the experiments' 1e-10)."""
+    rec = energy_recordings.simulate(1, "viscous + Coulomb", 0,
+                                     tolerance=energy_systems.QUICK_TOLERANCE)
     h = rec.model.energy(rec.x)
     power = rec.dissipated_power(rec.x)
     lost = np.concatenate([[0.0], np.cumsum((power[1:] + power[:-1]) / 2 * np.diff(rec.t))])
@@ -23,7 +26,8 @@ def test_energy_systems_quick(tmp_path):
     out = energy_systems.run(tmp_path, quick=True)
     results = json.loads((out / "results.json").read_text())
     row = results["default_recordings"]["recordings"][0]
-    rec = energy_recordings.simulate(1, "viscous + Coulomb", 0)
+    rec = energy_recordings.simulate(1, "viscous + Coulomb", 0,
+                                     tolerance=energy_systems.QUICK_TOLERANCE)
     law = {t["name"]: t["coefficient"] for t in row["terms"]}
     assert law["viscous joint 1"] == pytest.approx(rec.laws[0]["k"], rel=0.03)
     assert law["Coulomb joint 1"] == pytest.approx(rec.laws[0]["Fc"], rel=0.03)

@@ -18,8 +18,10 @@ def check(folder, *, noisy_error: float):
     assert clean["max_coefficient_error_percent"] < 0.5
     parity = results["pde_find_same_settings_as_pysindy"]
     assert parity["same_terms"] and parity["max_coefficient_difference"] < 1e-8
+    # quick runs: PySINDy's weak form is left to the reproduction (its figures are not
+    # checked here); our fits with and without the prior and PySINDy's PDE-FIND run
     assert {s["method"] for s in results["summary"]} == {
-        "ours (prior)", "ours (no prior)", "PySINDy weak", "PySINDy pde-find"}
+        "ours (prior)", "ours (no prior)", "PySINDy pde-find"}
     forecast = results["forecast"]
     assert forecast["relative_rms_error_hybrid_mean"] < forecast["relative_rms_error_prior_mean"]
     for name in ("fields.png", "discrepancy.png", "forecast.png", "report.md"):

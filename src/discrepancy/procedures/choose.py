@@ -94,7 +94,8 @@ class ProcedureChoice:
 
 def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
                      n_origins: int = 3, horizon: int | None = None, fit_kws=None,
-                     join: bool = True, progress: bool | None = None) -> ProcedureChoice:
+                     join: bool = True, holds=None,
+                     progress: bool | None = None) -> ProcedureChoice:
     """Choose a library or procedure for ``model`` by forecasts inside ``x``.
 
     Args:
@@ -113,10 +114,18 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
         fit_kws: further keyword arguments of ``fit`` or ``fit_outputs``. With outputs and
             inputs, a ``u_hold`` left out here is chosen too (module doc).
         join: also score the union of the two libraries that forecast best (module doc).
+        holds: the input holds the last round may try (default every one of
+            :data:`~discrepancy.hybrid.inputs.HOLDS`; the default hold, the candidates' own,
+            is always scored); fewer save run time where a hold is known not to suit the
+            data (e.g. a quick test).
     """
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
     check_argument("n_origins", n_origins, Interval(Integral, 2))
     check_argument("join", join, bool)
+    holds = HOLDS if holds is None else (holds,) if isinstance(holds, str) else tuple(holds)
+    unknown = [h for h in holds if h not in HOLDS]
+    if unknown:
+        raise ParameterError(f"holds must name input holds among {HOLDS}; got {unknown!r}")
     fit_kws = dict(fit_kws or {})
     templates = _templates(model, candidates, records, outputs, fit_kws)
     shortest = min(r.n_samples for r in records)
@@ -132,7 +141,7 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
         contest.enter(_joined(templates, contest.scores, names), "joined")
     if outputs is not None and records[0].u is not None and "u_hold" not in fit_kws:
         pick = contest.pick()
-        for hold in HOLDS:
+        for hold in holds:
             if hold != DEFAULT_HOLD:
                 contest.enter({f"{pick}, u_hold={hold}": contest.entries[pick][0]},
                               "input hold", {**fit_kws, "u_hold": hold})

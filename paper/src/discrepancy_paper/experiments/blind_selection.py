@@ -29,6 +29,7 @@ import discrepancy as dc
 
 from .blind_selection_report import (
     HORIZONS,
+    k_step_rms,
     report_cases,
     report_disturbance,
     report_disturbance_seeds,
@@ -174,19 +175,8 @@ def disturbance_errors(case) -> dict:
     record's noise-free states, from every measured (noisy) test state, for the prior alone
     and the chosen hybrid: ``{model: {horizon: {"whole test record", "during and after the
     push"}}}`` plus the chosen library."""
-    t, (x_noisy, u, x_true) = case["t"], case["test"]
-    lo, hi = case["push"]
-    after = (t >= lo) & (t < hi + 4)
     chosen = next(k for k in case["models"] if k.startswith("chosen"))
     out = {"chosen_library": case["choice"].chosen}
     for label, name in (("prior alone", "prior alone"), ("chosen hybrid", chosen)):
-        out[label] = {}
-        for horizon, k in HORIZONS.items():
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                error = case["models"][name].predict_ahead(x_noisy, t, u=u, steps=k) - \
-                    x_true[k:]
-            out[label][horizon] = {
-                "whole test record": float(np.sqrt(np.mean(error ** 2))),
-                "during and after the push": float(np.sqrt(np.mean(error[after[k:]] ** 2)))}
+        out[label] = {horizon: k_step_rms(case, name, k) for horizon, k in HORIZONS.items()}
     return out

@@ -7,6 +7,32 @@ import numpy as np
 HORIZONS = {"0.5 time units": 50, "2 time units": 200}
 
 
+def forecasts(case, name, k):
+    """Model ``name``'s ``k``-step forecasts of the disturbed test record from every measured
+    (noisy) test state; made once per case and kept in it (the report's table, its figure
+    and the table over seeds read the same forecasts)."""
+    import warnings
+
+    made = case.setdefault("forecasts", {})
+    if (name, k) not in made:
+        t, (x_noisy, u, _) = case["t"], case["test"]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            made[name, k] = case["models"][name].predict_ahead(x_noisy, t, u=u, steps=k)
+    return made[name, k]
+
+
+def k_step_rms(case, name, k) -> dict:
+    """RMS error of model ``name``'s ``k``-step forecasts against the noise-free test
+    states, over the whole test record and during the push and the 4 time units after."""
+    t, x_true = case["t"], case["test"][2]
+    lo, hi = case["push"]
+    error = forecasts(case, name, k) - x_true[k:]
+    window = ((t >= lo) & (t < hi + 4))[k:]
+    return {"whole test record": float(np.sqrt(np.mean(error ** 2))),
+            "during and after the push": float(np.sqrt(np.mean(error[window] ** 2)))}
+
+
 def report_cases(rep, cases, definitions, seeds):
     """(a) exact priors and (b) the missing weak damping: counts over seeds per method."""
     import matplotlib.pyplot as plt
@@ -91,18 +117,13 @@ def _report_disturbance(rep, case):
 
     from discrepancy.plots.selection import procedure_figure
 
-    t, (x_noisy, u, x_true) = case["t"], case["test"]
+    t, x_true = case["t"], case["test"][2]
     lo, hi = case["push"]
-    after = (t >= lo) & (t < hi + 4)
     results, rows = {}, []
     for name, model in case["models"].items():
         results[name] = {"equations": model.equations(), "k_step_rms": {}}
         for label, k in HORIZONS.items():
-            pred = model.predict_ahead(x_noisy, t, u=u, steps=k)
-            error = pred - x_true[k:]
-            window = after[k:]
-            rms = {"whole test record": float(np.sqrt(np.mean(error ** 2))),
-                   "during and after the push": float(np.sqrt(np.mean(error[window] ** 2)))}
+            rms = k_step_rms(case, name, k)
             results[name]["k_step_rms"][label] = rms
             rows.append([name, label, rms["whole test record"],
                          rms["during and after the push"]])
@@ -145,8 +166,8 @@ def _report_disturbance(rep, case):
     axes[0].axhline(-train_max, ls=":", color="0.4")
     axes[0].legend(fontsize=7, ncol=3)
     k = HORIZONS["2 time units"]
-    for name, model in case["models"].items():
-        pred = model.predict_ahead(x_noisy, t, u=u, steps=k)
+    for name in case["models"]:
+        pred = forecasts(case, name, k)
         axes[1].plot(t[k:], np.abs(pred[:, 0] - x_true[k:, 0]), lw=0.8, label=name)
     axes[1].axvspan(lo, hi, color="tab:red", alpha=0.15)
     axes[1].set_yscale("log")

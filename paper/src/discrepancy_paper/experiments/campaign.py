@@ -32,9 +32,11 @@ ROUTES = ("derivatives of the 0.5 ms log, all states",
           "smoothed 20 ms log, measured states (output feedback)")
 
 
-def nominal(task, true_equations, flawed_equations) -> dict:
+def nominal(task, true_equations, flawed_equations, *, reference_run: bool = True) -> dict:
     """Plans, learning from the flawed attempt, and every controller on the nominal system
-    (both given as ``(states, inputs, rhs)`` sympy equations)."""
+    (both given as ``(states, inputs, rhs)`` sympy equations); ``reference_run=False``
+    (quick runs) builds the reference solver for the perturbed study without running it
+    here."""
     f_true, flawed_eqs = as_casadi(true_equations), flawed_equations
     f_flawed = as_casadi(flawed_eqs)
     x_start = task.x_start
@@ -53,7 +55,7 @@ def nominal(task, true_equations, flawed_equations) -> dict:
             "hybrid + TVLQR": hybrid_tracker,
             "hybrid + MPC": task.mpc_law(f_hybrid, hybrid_plan, hybrid_tracker, hybrid_mpc)}
     reference = task.mpc(f_hybrid, reference=True) if task.reference_mpc else None
-    if reference is not None:
+    if reference is not None and reference_run:
         laws[REFERENCE] = reference.follow(hybrid_plan, tracker=hybrid_tracker)
     for k, (name, law) in enumerate(laws.items()):
         runs[name] = task.run(f_true, law, x_start, seed=2 + k)

@@ -142,7 +142,7 @@ def _forecast(rep, example, U, model, noise) -> dict:
 
     import discrepancy as dc
 
-    horizon = example.t[: max(2, len(example.t) // 2)]
+    horizon = example.t[: max(2, int(len(example.t) * example.forecast_share))]
     hybrid = model.simulate(U[0], horizon, rtol=1e-8)
     prior = dc.PDEDiscrepancyModel.prior_only(example.prior, example.grid,
                                               field_names=example.fields).simulate(
