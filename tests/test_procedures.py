@@ -143,6 +143,8 @@ def test_candidates_are_checked():
     with pytest.raises(dc.errors.ParameterError, match="holds"):
         dc.choose_procedure(dc.DiscrepancyModel(prior=oscillator), np.ones((100, 2)),
                             holds=("linear", "sinc"))
+    with pytest.raises(dc.errors.ParameterError, match=r"holds must be .*got 5"):
+        dc.choose_procedure(dc.DiscrepancyModel(prior=oscillator), np.ones((100, 2)), holds=5)
 
 
 def test_procedure_figure_has_one_column_per_candidate(friction_records):

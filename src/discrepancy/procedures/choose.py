@@ -122,10 +122,10 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
     check_argument("n_origins", n_origins, Interval(Integral, 2))
     check_argument("join", join, bool)
-    holds = HOLDS if holds is None else (holds,) if isinstance(holds, str) else tuple(holds)
-    unknown = [h for h in holds if h not in HOLDS]
-    if unknown:
-        raise ParameterError(f"holds must name input holds among {HOLDS}; got {unknown!r}")
+    holds = HOLDS if holds is None else (holds,) if isinstance(holds, str) else holds
+    if not isinstance(holds, (list, tuple)) or any(h not in HOLDS for h in holds):
+        raise ParameterError(f"holds must be input holds among {HOLDS} (a name or a list); "
+                             f"got {holds!r}")
     fit_kws = dict(fit_kws or {})
     templates = _templates(model, candidates, records, outputs, fit_kws)
     shortest = min(r.n_samples for r in records)
