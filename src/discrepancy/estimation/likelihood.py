@@ -10,9 +10,9 @@ measurement noise ``R = diag(r²)``. One step of the extended Kalman filter
 ``(Ξ, q, r)`` as inputs and ``mapaccum`` runs ``BLOCK`` samples per call; a record's
 objective is an MX graph of its blocks with the data as inputs, so its gradient costs
 about three evaluations of the filter whatever the number of parameters. From
-:data:`COMPILE_SAMPLES` samples the graph is compiled to C
-(:func:`~discrepancy.hybrid.codegen.compiled`; the data are inputs, so the source is small
-and a second fit of the same support and record sizes loads it from the cache). The EKF's
+:data:`COMPILE_SAMPLES` samples the block and its reverse-mode derivative are compiled to C
+(:func:`~discrepancy.hybrid.codegen.compiled`): one library per support, whatever the
+records, cached on disk. The EKF's
 covariance depends on the model's Jacobian, so the gradient needs second derivatives of
 ``f``: CasADi takes them from the same expressions.
 """
@@ -29,15 +29,15 @@ from .compiled import BLOCK, flat_update, layout, run_blocks, step_expressions
 from .disturbances import augment_casadi
 from .dynamics import check_points
 
-#: samples (over all records) from which an objective is compiled to C. Measured on the
-#: prediction-error experiment's oscillator (3 filter states): an evaluation with its gradient
-#: costs about 30-40 us per sample in CasADi's virtual machine and 3 us compiled, compiling
-#: one objective about 1 s (0.3 s at -O0), and a fit evaluates each support's objective 15 to
-#: 20 times, so compiling pays from about 1,000 samples, sooner when fits repeat (the cache
-#: holds one library per support and record size). Whole fits, CPU with the compiler, cold
-#: cache: 6000 samples 42 s -> 28 s, the quick experiment's 1500-sample records 43 s -> 26 s,
-#: identical coefficients. Both costs grow with the filter's size, so the break-even in
-#: samples hardly depends on the model
+#: samples (over all records) from which an objective's blocks are compiled to C. Measured
+#: on the prediction-error experiment's oscillator (3 filter states): an evaluation with its
+#: gradient costs about 30 us per sample in CasADi's virtual machine and 2-3 us compiled,
+#: compiling a support's blocks about a second, and a fit evaluates each support's objective
+#: 15 to 20 times, so compiling pays from about 1,000 samples (sooner when a support comes
+#: back: the library is cached). Whole fits, CPU with the compiler, cold cache: 6000 samples
+#: 42 s -> 20 s, the quick experiment (1500-sample records) 43 s -> 21 s, identical
+#: coefficients. Both costs grow with the filter's size, so the break-even in samples hardly
+#: depends on the model
 COMPILE_SAMPLES = 1000
 
 
@@ -92,33 +92,44 @@ class InnovationLikelihood:
         self._nll = ca.Function("step_nll", args, [carry_next, sym["update"][4]]).mapaccum(
             "filter_nll", BLOCK)
         self.sizes = layout(self.N, self.k, r, substeps)
+        self._compiled = None
 
     def objective(self, records: list[LikelihoodRecord], *, compile: bool | None = None):
         """The mean negative log-likelihood over the weighted samples of ``records`` (the
         mean over their total weight) and its gradient, as an :class:`Objective`
-        ``(ξ (support), q (N), r (k)) -> (value, gradient)``; compiled to C when ``compile``
-        is True, or when None and the records hold :data:`COMPILE_SAMPLES` samples."""
+        ``(ξ (support), q (N), r (k)) -> (value, gradient)``; its filter blocks compiled to
+        C when ``compile`` is True, or when None and the records hold
+        :data:`COMPILE_SAMPLES` samples."""
         ca = casadi_module()
+        values = []
+        for rec in records:
+            columns, weights = _used_blocks(rec.data, rec.weights)
+            values += [columns, weights, np.concatenate([rec.x0, rec.P0.ravel(order="F")])]
+        if compile is None:
+            compile = sum(len(w) for w in values[1::3]) >= COMPILE_SAMPLES
+        blocks = self._compiled_blocks() if compile else self._nll
         xi, q, r = ca.MX.sym("xi", int(self.support.sum())), ca.MX.sym("q", self.N), \
             ca.MX.sym("r", self.k)
         total, weight = ca.MX(0), sum(float(rec.weights.sum()) for rec in records)
-        inputs, values = [], []
-        for j, rec in enumerate(records):
-            columns, weights = _used_blocks(rec.data, rec.weights)
-            data, w = ca.MX.sym(f"data{j}", *columns.shape), ca.MX.sym(f"w{j}", len(weights))
+        inputs = []
+        for j, columns in enumerate(values[::3]):
+            data, w = ca.MX.sym(f"data{j}", *columns.shape), ca.MX.sym(f"w{j}", columns.shape[1])
             carry = ca.MX.sym(f"start{j}", self.N + self.N ** 2)
             inputs += [data, w, carry]
-            values += [columns, weights, np.concatenate([rec.x0, rec.P0.ravel(order="F")])]
             for i in range(0, columns.shape[1], BLOCK):
-                after, nll = self._nll(carry, data[:, i:i + BLOCK], xi, q, r)
+                after, nll = blocks(carry, data[:, i:i + BLOCK], xi, q, r)
                 total = total + ca.mtimes(nll, w[i:i + BLOCK])
                 carry = after[:, -1]
         total = total / max(weight, 1.0)
         grads = ca.gradient(total, ca.vertcat(xi, q, r))
-        function = ca.Function("likelihood_objective", [xi, q, r, *inputs], [total, grads])
-        if compile is None:
-            compile = sum(len(v) for v in values[1::3]) >= COMPILE_SAMPLES
-        return Objective(compiled(function, enabled=compile), values)
+        return Objective(ca.Function("objective", [xi, q, r, *inputs], [total, grads]), values)
+
+    def _compiled_blocks(self):
+        """The likelihood's filter blocks and their reverse-mode derivative as compiled C,
+        built on first use (one library per support, whatever the records)."""
+        if self._compiled is None:
+            self._compiled = compiled(self._nll, reverse=True)
+        return self._compiled
 
     def run(self, record: LikelihoodRecord, coef, q, r):
         """Step outputs and predictions of the filter over ``record`` (numeric), as

@@ -48,7 +48,7 @@ def compiler() -> str | None:
     return None
 
 
-def compiled(function, *, enabled=True):
+def compiled(function, *, enabled=True, reverse=False):
     """``function`` as compiled C (a ``casadi.external`` of the same name and signature), or
     ``function`` itself when ``enabled`` is False or compiling is not possible (warned).
 
@@ -56,6 +56,9 @@ def compiled(function, *, enabled=True):
         function: a ``casadi.Function`` that supports code generation (SX functions, MX
             graphs of them; not every plugin does).
         enabled: False to skip compiling (returns ``function``).
+        reverse: also compile its reverse-mode derivative (CasADi finds it in the library
+            by its name, ``adj1_<name>``), so that gradients of graphs calling the external
+            stay compiled.
     """
     check_argument("compile", enabled, bool)
     if not enabled:
@@ -66,6 +69,8 @@ def compiled(function, *, enabled=True):
         with tempfile.TemporaryDirectory() as tmp:
             generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
             generator.add(function)
+            if reverse:
+                generator.add(function.reverse(1))
             generator.generate(tmp + os.sep)
             source = Path(tmp, f"{name}.c").read_bytes()
             digest = hashlib.sha256(source + OPTIMISATION.encode()).hexdigest()[:20]
