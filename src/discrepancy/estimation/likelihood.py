@@ -101,20 +101,18 @@ class InnovationLikelihood:
         C when ``compile`` is True, or when None and the records hold
         :data:`COMPILE_SAMPLES` samples."""
         ca = casadi_module()
-        values = []
-        for rec in records:
-            columns, weights = _used_blocks(rec.data, rec.weights)
-            values += [columns, weights, np.concatenate([rec.x0, rec.P0.ravel(order="F")])]
+        parts = [(*_used_blocks(rec.data, rec.weights),
+                  np.concatenate([rec.x0, rec.P0.ravel(order="F")])) for rec in records]
         if compile is None:
-            compile = sum(len(w) for w in values[1::3]) >= COMPILE_SAMPLES
+            compile = sum(len(w) for _, w, _ in parts) >= COMPILE_SAMPLES
         blocks = self._compiled_blocks() if compile else self._nll
         xi, q, r = ca.MX.sym("xi", int(self.support.sum())), ca.MX.sym("q", self.N), \
             ca.MX.sym("r", self.k)
         total, weight = ca.MX(0), sum(float(rec.weights.sum()) for rec in records)
         inputs = []
-        for j, columns in enumerate(values[::3]):
-            data, w = ca.MX.sym(f"data{j}", *columns.shape), ca.MX.sym(f"w{j}", columns.shape[1])
-            carry = ca.MX.sym(f"start{j}", self.N + self.N ** 2)
+        for j, (columns, weights, start) in enumerate(parts):
+            data, w = ca.MX.sym(f"data{j}", *columns.shape), ca.MX.sym(f"w{j}", len(weights))
+            carry = ca.MX.sym(f"start{j}", len(start))
             inputs += [data, w, carry]
             for i in range(0, columns.shape[1], BLOCK):
                 after, nll = blocks(carry, data[:, i:i + BLOCK], xi, q, r)
@@ -122,7 +120,8 @@ class InnovationLikelihood:
                 carry = after[:, -1]
         total = total / max(weight, 1.0)
         grads = ca.gradient(total, ca.vertcat(xi, q, r))
-        return Objective(ca.Function("objective", [xi, q, r, *inputs], [total, grads]), values)
+        return Objective(ca.Function("objective", [xi, q, r, *inputs], [total, grads]),
+                         [v for part in parts for v in part])
 
     def _compiled_blocks(self):
         """The likelihood's filter blocks and their reverse-mode derivative as compiled C,
@@ -154,14 +153,12 @@ class Objective:
 
 
 def _used_blocks(data, weights):
-    """The record's data as columns ``(d, L)`` and its weights ``(L,)``, zero-padded to
-    whole blocks and cut after the last block with a weighted sample."""
-    m = len(data)
-    last = np.flatnonzero(weights)
-    used = 0 if not len(last) else -(-(int(last[-1]) + 1) // BLOCK) * BLOCK
-    padded = max(used, -(-m // BLOCK) * BLOCK)
-    columns = np.zeros((data.shape[1], padded))
-    columns[:, :m] = data.T
-    w = np.zeros(padded)
-    w[:m] = weights
-    return columns[:, :used], w[:used]
+    """The record's data as columns ``(d, L)`` and its weights ``(L,)``: whole blocks up to
+    the last one with a weighted sample, zero-padded past the record's end."""
+    seen = np.flatnonzero(weights)
+    used = 0 if not len(seen) else -(-(int(seen[-1]) + 1) // BLOCK) * BLOCK
+    kept = min(len(data), used)
+    columns, w = np.zeros((data.shape[1], used)), np.zeros(used)
+    columns[:, :kept] = data[:kept].T
+    w[:kept] = weights[:kept]
+    return columns, w

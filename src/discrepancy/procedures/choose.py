@@ -41,7 +41,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ..base import clone
-from ..constraints import Integral, Interval, check_argument
+from ..constraints import Integral, Interval, Options, Predicate, check_argument
 from ..data.trajectory import as_trajectories
 from ..errors import ConvergenceError, ParameterError, describe
 from ..fitting.setup import resolve_names
@@ -92,6 +92,11 @@ class ProcedureChoice:
         return "\n".join(lines)
 
 
+#: ``holds=``: a list of input holds
+HOLD_LISTS = Predicate(lambda v: isinstance(v, (list, tuple)) and all(h in HOLDS for h in v),
+                       "a list of them")
+
+
 def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
                      n_origins: int = 3, horizon: int | None = None, fit_kws=None,
                      join: bool = True, holds=None,
@@ -122,10 +127,8 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     records = as_trajectories(x, t, u, x_name="x" if outputs is None else "y")
     check_argument("n_origins", n_origins, Interval(Integral, 2))
     check_argument("join", join, bool)
+    check_argument("holds", holds, None, Options(HOLDS), HOLD_LISTS)
     holds = HOLDS if holds is None else (holds,) if isinstance(holds, str) else holds
-    if not isinstance(holds, (list, tuple)) or any(h not in HOLDS for h in holds):
-        raise ParameterError(f"holds must be input holds among {HOLDS} (a name or a list); "
-                             f"got {holds!r}")
     fit_kws = dict(fit_kws or {})
     templates = _templates(model, candidates, records, outputs, fit_kws)
     shortest = min(r.n_samples for r in records)
@@ -219,13 +222,19 @@ def _joined(templates, scores, names) -> dict:
     parts = list(dict.fromkeys([*a.split(" + "), *b.split(" + ")]))
     degrees = [p for p in parts if p.startswith("polynomial ")]
     if degrees:             # the highest degree holds the lower ones and the linear terms
-        top = max(degrees, key=lambda p: p.split()[-1])
+        top = max(degrees, key=_degree)
         parts = [p for p in parts if p == top or (p != "linear" and p not in degrees)]
     first, second = templates[a].feature_library, templates[b].feature_library
     library = first + second
     if _width(library, names) == max(_width(first, names), _width(second, names)):
         return {}                                   # one library holds the other
     return {" + ".join(parts): clone(templates[a]).set_params(feature_library=library)}
+
+
+def _degree(part: str) -> int:
+    """The degree of a name part ``"polynomial <degree>"`` (0 when it names none)."""
+    last = part.split()[-1]
+    return int(last) if last.isdigit() else 0
 
 
 def _width(library, names) -> int:
