@@ -1,6 +1,8 @@
 """Text, tables, figures and results of the blind-selection experiment."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 #: k-step horizons of the disturbance test (samples at 0.01)
@@ -11,8 +13,6 @@ def forecasts(case, name, k):
     """Model ``name``'s ``k``-step forecasts of the disturbed test record from every measured
     (noisy) test state; made once per case and kept in it (the report's table, its figure
     and the table over seeds read the same forecasts)."""
-    import warnings
-
     made = case.setdefault("forecasts", {})
     if (name, k) not in made:
         t, (x_noisy, u, _) = case["t"], case["test"]
