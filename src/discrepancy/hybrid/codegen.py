@@ -61,6 +61,7 @@ def compiled(function, *, enabled=True, reverse=False):
             stay compiled.
     """
     check_argument("compile", enabled, bool)
+    check_argument("reverse", reverse, bool)
     if not enabled:
         return function
     ca = casadi_module()
