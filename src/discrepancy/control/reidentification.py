@@ -187,17 +187,18 @@ class SmoothedLogUpdater:
 
     def _smooth(self, setup, current, y, dt, u, previous=None):
         from ..estimation import ExtendedKalmanFilter
+        from ..estimation.dynamics import dynamics_of
 
         names = list(setup.state_names)
-        rhs = self._equations(setup, current)
+        # the model is written in CasADi once; each noise level only rebuilds the filter steps
+        dynamics = dynamics_of(self._equations(setup, current), state_names=names,
+                               input_names=list(setup.input_names))
         free = np.array([name not in self._kinematics for name in names], dtype=float)
 
         def filter_with(q):
-            ekf = ExtendedKalmanFilter(rhs, outputs=self.outputs, process_noise=q,
+            ekf = ExtendedKalmanFilter(dynamics, outputs=self.outputs, process_noise=q,
                                        measurement_noise=self.measurement_noise,
-                                       substeps=self.substeps, u_hold="zoh",
-                                       state_names=names,
-                                       input_names=list(setup.input_names))
+                                       substeps=self.substeps, u_hold="zoh")
             return ekf, ekf.filter(y, dt, u=u)
 
         if isinstance(self.process_noise, str):
@@ -207,11 +208,12 @@ class SmoothedLogUpdater:
             grid = PROCESS_NOISE_GRID if previous is None else \
                 [level for level in PROCESS_NOISE_GRID
                  if abs(np.log10(level / previous)) < 0.6]
-            scores = [_log_likelihood(filter_with, level * free) for level in grid]
-            q = grid[int(np.nanargmax(scores))] * free
+            level, run = _most_likely(filter_with, grid, free)
+            q = level * free
+            ekf, result = run or filter_with(q)   # every level diverged: its error is raised
         else:
             q = np.broadcast_to(np.asarray(self.process_noise, dtype=float), free.shape)
-        ekf, result = filter_with(q)
+            ekf, result = filter_with(q)
         return ekf.smooth(result)[0], q
 
 
@@ -231,8 +233,18 @@ def _check_settings(updater) -> None:
     updater.outputs, updater._kinematics = list(outputs), dict(kin or {})
 
 
-def _log_likelihood(filter_with, q) -> float:
-    try:
-        return float(filter_with(q)[1].log_likelihood)
-    except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # a diverging filter
-        return -np.inf
+def _most_likely(filter_with, grid, free):
+    """The first level of ``grid`` whose filter (process noise ``level * free``) has the
+    largest innovation likelihood, with its ``(filter, result)`` (None if every one
+    diverged; then the first level). Only the best run is kept: a long log's covariances
+    are large."""
+    best, best_score, best_run = grid[0], -np.inf, None
+    for level in grid:
+        try:
+            run = filter_with(level * free)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # a diverging filter
+            continue
+        score = float(run[1].log_likelihood)
+        if score > best_score:
+            best, best_score, best_run = level, score, run
+    return best, best_run

@@ -18,6 +18,8 @@ prediction-error fit builds the same step with them as symbols.
 """
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
 from ..hybrid.codegen import BufferedFunction
@@ -64,37 +66,58 @@ def flat_update(ca, update):
 
 
 class CompiledSteps:
-    """The predict, update and block Functions of one filter (constants baked in)."""
+    """The predict, update and block Functions of one filter (constants baked in). The
+    block, which whole records use, is built at once; the online ``predict`` and ``update``
+    when first called (a filter that only runs records, as in a search over noise levels,
+    never builds them)."""
 
     def __init__(self, kind, dynamics, measurement, Q, R, substeps, weights):
         import casadi as ca
 
         n, k, r = dynamics.n, measurement.k, dynamics.r
         self.n, self.k, self.r, self.substeps = n, k, r, substeps
-        ops = CasadiOps(ca, dynamics.casadi, ca.DM(dynamics.parameters), measurement.casadi,
-                        n, r, substeps)
-        sym = step_expressions(ca, kind, ops, n, k, Q=ca.DM(Q), R=ca.DM(R),
+        self._kind, self._discrete, self._weights = kind, dynamics.discrete_time, weights
+        self._Q, self._R = ca.DM(Q), ca.DM(R)
+        self._ops = CasadiOps(ca, dynamics.casadi, ca.DM(dynamics.parameters),
+                              measurement.casadi, n, r, substeps)
+        sym = step_expressions(ca, kind, self._ops, n, k, Q=self._Q, R=self._R,
                                substeps=substeps, discrete=dynamics.discrete_time,
                                weights=weights)
-        x, P, U, h = sym["x"], sym["P"], sym["U"], sym["h"]
-        if kind == "ekf":
-            alone = km.ekf_predict(ops, x, P, U, h, ca.DM(Q), substeps, dynamics.discrete_time)
-            update = km.ekf_update(ops, x, P, sym["y"], sym["w"], ca.DM(R))
-        else:
-            alone = km.ukf_predict(ops, x, P, U, h, ca.DM(Q), substeps,
-                                   dynamics.discrete_time, weights)
-            update = km.ukf_update(ops, x, P, sym["y"], sym["w"], ca.DM(R), weights)
-        self.predict = fast_call(ca.Function(
-            "predict", [ca.vertcat(x, ca.vec(P), U, h)],
-            [ca.densify(ca.vertcat(alone[0], ca.vec(alone[1]), ca.vec(alone[2])))]))
-        self.update = fast_call(ca.Function(
-            "update", [ca.vertcat(x, ca.vec(P), sym["y"], sym["w"])],
-            [ca.densify(flat_update(ca, update))]))
+        self._sym = sym
         xp, Pp, C = sym["predict"]
         step = ca.Function("step", [sym["carry"], sym["data"]],
                            [ca.vertcat(xp, ca.vec(Pp)),
                             ca.vertcat(flat_update(ca, sym["update"]), ca.vec(C))])
         self.block = step.mapaccum("filter", BLOCK)
+
+    @cached_property
+    def predict(self):
+        """``[x; vec P; U; h] -> [x⁺; vec P⁺; vec C]`` (a flat call, see :func:`fast_call`)."""
+        import casadi as ca
+
+        x, P, U, h = (self._sym[name] for name in ("x", "P", "U", "h"))
+        if self._kind == "ekf":
+            alone = km.ekf_predict(self._ops, x, P, U, h, self._Q, self.substeps,
+                                   self._discrete)
+        else:
+            alone = km.ukf_predict(self._ops, x, P, U, h, self._Q, self.substeps,
+                                   self._discrete, self._weights)
+        return fast_call(ca.Function(
+            "predict", [ca.vertcat(x, ca.vec(P), U, h)],
+            [ca.densify(ca.vertcat(alone[0], ca.vec(alone[1]), ca.vec(alone[2])))]))
+
+    @cached_property
+    def update(self):
+        """``[x; vec P; y; w] -> [x; vec P; e; vec S; nll]`` (a flat call)."""
+        import casadi as ca
+
+        x, P, y, w = (self._sym[name] for name in ("x", "P", "y", "w"))
+        if self._kind == "ekf":
+            update = km.ekf_update(self._ops, x, P, y, w, self._R)
+        else:
+            update = km.ukf_update(self._ops, x, P, y, w, self._R, self._weights)
+        return fast_call(ca.Function("update", [ca.vertcat(x, ca.vec(P), y, w)],
+                                     [ca.densify(flat_update(ca, update))]))
 
     def run(self, x0, P0, data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """See :func:`run_blocks`."""
