@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import ConvergenceWarning
 from ..hybrid.casadi_form import casadi_module, library_columns, prior_expression
+from ..optimizers.base import refit_on_support
 from ..runge_kutta import runge_kutta_step
 
 FOLDS = 5
@@ -57,7 +58,8 @@ class OneStepFit:
             if chosen is None:
                 fitted = copy.deepcopy(self.template).fit_statistics(stats, setup)
             else:
-                fitted = chosen.with_coefficients(_refit(stats, chosen.coefficients() != 0))
+                fitted = chosen.with_coefficients(refit_on_support(
+                    stats.gram, stats.rhs, chosen.coefficients() != 0, minimum_norm=True))
             new = fitted.coefficients()
             change = np.max(np.abs(new - coef)) / max(np.max(np.abs(new)), 1e-12)
             coef = new
@@ -78,16 +80,6 @@ class OneStepFit:
         theta = 0.5 * (theta_map(x[:-1].T, u[:-1].T) + theta_map(x[1:].T, u[:-1].T)).full().T
         target = (x[1:] - stepped.full().T) / dt + theta @ coef.T
         return theta, target, (x[1:] - x[:-1]) / dt
-
-
-def _refit(stats, support) -> np.ndarray:
-    """Least-squares coefficients ``(n, p)`` of each state's terms in ``support``."""
-    coef = np.zeros(support.shape)
-    for i, terms in enumerate(support):
-        if terms.any():
-            coef[i, terms] = np.linalg.lstsq(stats.gram[np.ix_(terms, terms)],
-                                             stats.rhs[terms, i], rcond=None)[0]
-    return coef
 
 
 def _flow_functions(setup, substeps: int):

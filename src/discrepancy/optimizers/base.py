@@ -48,20 +48,31 @@ def solve_normal(gram: np.ndarray, rhs: np.ndarray, alpha: float = 0.0) -> np.nd
 
 
 def refit_on_support(gram: np.ndarray, rhs: np.ndarray, support: np.ndarray,
-                     alpha: float = 0.0) -> np.ndarray:
+                     alpha: float = 0.0, *, minimum_norm: bool = False) -> np.ndarray:
     """Least squares (ridge ``alpha``) of each target on its own terms, from the sums alone.
 
     ``gram`` ``(p, p)``, ``rhs`` ``(p, n)`` and ``support`` ``(n, p)`` bool give coefficients
     ``(n, p)`` (zero off the support); one target's ``rhs`` ``(p,)`` and ``support`` ``(p,)``
     give ``(p,)``. The unbiased refit of every solver and the refits of model selection.
+    ``minimum_norm``: solve each support by numpy's minimum-norm least squares (SVD)
+    instead of :func:`solve_normal`'s equilibrated Cholesky (the re-identification's
+    fixed point, :mod:`discrepancy.control.one_step`, whose figures were made with it).
     """
     if rhs.ndim == 1:
-        return refit_on_support(gram, rhs[:, None], support[None, :], alpha)[0]
+        return refit_on_support(gram, rhs[:, None], support[None, :], alpha,
+                                minimum_norm=minimum_norm)[0]
     coef = np.zeros(support.shape)
     for i, s in enumerate(support):
         if s.any():
-            coef[i, s] = solve_normal(gram[np.ix_(s, s)], rhs[s, i], alpha)
+            block = gram[np.ix_(s, s)]
+            coef[i, s] = _minimum_norm(block, rhs[s, i], alpha) if minimum_norm else \
+                solve_normal(block, rhs[s, i], alpha)
     return coef
+
+
+def _minimum_norm(gram: np.ndarray, rhs: np.ndarray, alpha: float) -> np.ndarray:
+    a = gram + alpha * np.eye(len(gram)) if alpha else gram
+    return np.linalg.lstsq(a, rhs, rcond=None)[0]
 
 
 #: folds of a standalone ``fit(theta, y)`` (each made of two contiguous runs of rows)
