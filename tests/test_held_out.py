@@ -44,6 +44,26 @@ def test_chunks_of_any_size_give_the_same_windows():
             np.testing.assert_array_equal(a.x[:a.filled], b.x[:b.filled])
 
 
+def test_windows_kept_through_thinning_hold_their_samples_whatever_the_chunks():
+    """Windows thinned away are never filled; the kept ones hold exactly their samples
+    (halo before the origin, lead after it), whether the data arrive whole or in pieces."""
+    t, x = data(2000)
+    for size in (2000, 1, 45, 500):
+        pieces = [(t[i:i + size], x[i:i + size]) for i in range(0, 2000, size)]
+        held = feed(HeldOutWindows(segment=32, n_folds=5, pre=6, max_lead=50, max_windows=3),
+                    pieces)
+        origins = list(range(32, 2000, 32))            # 0 lacks the 6 samples before it
+        expected = []
+        for o in origins:
+            expected.append(o)
+            if len(expected) > 6:
+                expected = expected[::2]
+        assert [int(w.x[w.origin, 0]) for w in held.windows] == expected, size
+        for w in held.windows:
+            o = int(w.x[w.origin, 0])
+            np.testing.assert_array_equal(w.x[:w.filled, 0], np.arange(o - 6, min(2000, o + 51)))
+
+
 def test_rows_continue_across_trajectories_and_thinning_keeps_every_other():
     t, x = data(70)
     held = HeldOutWindows(segment=10, n_folds=5, pre=0, max_lead=5, max_windows=3)
