@@ -39,7 +39,10 @@ import copy
 import numpy as np
 
 from ..constraints import Integral, Interval, check_argument
+from ..differentiation import FiniteDifference
 from ..errors import ParameterError, ShapeError, describe
+from ..estimation import ExtendedKalmanFilter
+from ..estimation.dynamics import dynamics_of
 from ..symbolic import symbol
 from .one_step import OneStepFit
 
@@ -153,8 +156,6 @@ class SmoothedLogUpdater:
                 raise ParameterError(f"model must be an unfitted DiscrepancyModel with a sympy "
                                      f"prior (a list of expressions); got {describe(model)}")
             _check_settings(self)
-            from ..differentiation import FiniteDifference
-
             self._template = copy.deepcopy(model)
             if self.optimizer is not None:
                 self._template.optimizer = copy.deepcopy(self.optimizer)
@@ -186,9 +187,6 @@ class SmoothedLogUpdater:
         return rhs
 
     def _smooth(self, setup, current, y, dt, u, previous=None):
-        from ..estimation import ExtendedKalmanFilter
-        from ..estimation.dynamics import dynamics_of
-
         names = list(setup.state_names)
         # the model is written in CasADi once; each noise level only rebuilds the filter steps
         dynamics = dynamics_of(self._equations(setup, current), state_names=names,
