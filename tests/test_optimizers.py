@@ -264,12 +264,14 @@ def test_refit_on_support_is_least_squares_of_each_target_on_its_own_terms():
     a = theta[:, support[0]]
     np.testing.assert_allclose(ridge, np.linalg.solve(a.T @ a + 10.0 * np.eye(3), a.T @ y[:, 0]),
                                rtol=1e-12)
-    # the minimum-norm solve: the same least squares, and on a rank-deficient support (a
-    # repeated column) the smallest coefficients, which the Cholesky path does not promise
-    for alpha in (0.0, 10.0):
-        np.testing.assert_allclose(
-            refit_on_support(theta.T @ theta, theta.T @ y, support, alpha, minimum_norm=True),
-            refit_on_support(theta.T @ theta, theta.T @ y, support, alpha), rtol=1e-10)
+    # the minimum-norm solve: the same least squares and ridge as computed from the rows,
+    # and on a rank-deficient support (a repeated column) the smallest coefficients, which
+    # the Cholesky path does not promise
+    plain, ridged = (refit_on_support(theta.T @ theta, theta.T @ y, support, alpha,
+                                      minimum_norm=True)[0, support[0]] for alpha in (0.0, 10.0))
+    np.testing.assert_allclose(plain, expected, rtol=1e-10)
+    np.testing.assert_allclose(ridged, np.linalg.solve(a.T @ a + 10.0 * np.eye(3),
+                                                       a.T @ y[:, 0]), rtol=1e-10)
     twice = np.c_[theta[:, :2], theta[:, :1]]             # column 0 twice
     both = refit_on_support(twice.T @ twice, twice.T @ y[:, 0], np.ones(3, bool),
                             minimum_norm=True)

@@ -208,7 +208,8 @@ class SmoothedLogUpdater:
                  if abs(np.log10(level / previous)) < 0.6]
             level, run = _most_likely(filter_with, grid, free)
             q = level * free
-            ekf, result = run or filter_with(q)   # every level diverged: its error is raised
+            # no level scored: the first is run again, and a diverging filter raises here
+            ekf, result = run or filter_with(q)
         else:
             q = np.broadcast_to(np.asarray(self.process_noise, dtype=float), free.shape)
             ekf, result = filter_with(q)
