@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..runge_kutta import runge_kutta_step
-from ..symbolic import compile_numpy
+from ..expression_tape import compile_numpy_many
 
 #: scaled squared error given to a lead once a forecast has diverged (10 standard deviations)
 CAP = 100.0
@@ -175,16 +175,17 @@ class BatchModel:
         used = np.flatnonzero(np.any(coef != 0, axis=(0, 1)))
         functions = setup.library.user_functions()
         names = setup.variable_names
-        self.terms = [compile_numpy(setup.library.feature_expressions_[j], names, functions)
-                      for j in used]
+        # one tape for all the terms: a subexpression they share is computed once
+        self.terms = compile_numpy_many([setup.library.feature_expressions_[j] for j in used],
+                                        names, functions) if len(used) else None
         self.coef = np.ascontiguousarray(coef[:, :, used].transpose(0, 2, 1))   # (B, q, n)
 
     def __call__(self, x: np.ndarray, u: np.ndarray | None) -> np.ndarray:
         """(Called inside ``np.errstate(all="ignore")``: a wild row is caught afterwards.)"""
         out = self.setup.prior.unchecked(x, u)
-        if self.terms:
-            z = x if u is None else np.hstack([x, u])
-            theta = np.column_stack([f(z) for f in self.terms])
+        if self.terms is not None:
+            z = x if u is None else np.concatenate((x, u), axis=1)
+            theta = np.column_stack(self.terms(z))
             out = out + np.einsum("bq,bqn->bn", theta, self.coef)
         return out
 
