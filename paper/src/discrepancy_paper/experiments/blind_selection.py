@@ -42,11 +42,13 @@ METHODS = {"forecasts (default)": "auto", "equation error (old default)": "optim
 
 
 def duffing(c: float = 0.0, cubic: float = 1.0):
-    return lambda x, u=None: np.c_[x[:, 1], -x[:, 0] - cubic * x[:, 0] ** 3 - c * x[:, 1]]
+    return lambda x, u=None: np.column_stack([x[:, 1],
+                                              -x[:, 0] - cubic * x[:, 0] ** 3 - c * x[:, 1]])
 
 
 def van_der_pol(alpha: float = 0.5):
-    return lambda x, u=None: np.c_[x[:, 1], alpha * (1 - x[:, 0] ** 2) * x[:, 1] - x[:, 0]]
+    return lambda x, u=None: np.column_stack([x[:, 1],
+                                              alpha * (1 - x[:, 0] ** 2) * x[:, 1] - x[:, 0]])
 
 
 def simulate(rhs, x0, t, u=None):
@@ -121,8 +123,8 @@ DISTURBANCE_SEEDS = (11, 12, 13, 14, 15)
 
 
 def forced(c, cubic, gain):
-    return lambda x, u: np.c_[x[:, 1], -x[:, 0] - cubic * x[:, 0] ** 3 - c * x[:, 1]
-                              + gain * u[:, 0]]
+    return lambda x, u: np.column_stack([x[:, 1], -x[:, 0] - cubic * x[:, 0] ** 3 - c * x[:, 1]
+                                         + gain * u[:, 0]])
 
 
 def forcing(amplitude, frequencies, phase):

@@ -36,8 +36,8 @@ QUICK_METHODS = ("defaults", "PySINDy defaults")
 
 def _lorenz(x, u=None, rho=28.0):
     x = np.atleast_2d(x)
-    return np.c_[10 * (x[:, 1] - x[:, 0]), x[:, 0] * (rho - x[:, 2]) - x[:, 1],
-                 x[:, 0] * x[:, 1] - 8 / 3 * x[:, 2]]
+    return np.column_stack([10 * (x[:, 1] - x[:, 0]), x[:, 0] * (rho - x[:, 2]) - x[:, 1],
+                            x[:, 0] * x[:, 1] - 8 / 3 * x[:, 2]])
 
 
 def systems() -> dict[str, dict]:
