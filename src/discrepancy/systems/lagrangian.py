@@ -17,7 +17,7 @@ from ..errors import ParameterError, ShapeError
 from ..expression_tape import compile_numpy_many
 from ..symbolic import compile_numpy, symbol
 from .base import System
-from .mass_checks import check_kinetic, solve_mass, stack_mass
+from .mass_checks import check_kinetic, solve_mass, stack_columns, stack_mass
 from .mechanics import lagrange_equations
 
 
@@ -139,7 +139,7 @@ class LagrangianSystem(System):
         k = len(self.position_names)
         values = self._functions(friction)(z)
         matrix = stack_mass(values, k, m)
-        b = np.stack([np.broadcast_to(v, (m,)) for v in values[k * k:]], axis=-1)
+        b = stack_columns(values[k * k:], m)
         acc = solve_mass(matrix, b, x, self.state_names)
         return np.hstack([x[:, len(self.position_names):], acc])
 

@@ -57,8 +57,16 @@ def check_kinetic(kinetic: sp.Expr, coordinates: Sequence[str], rates: Sequence[
 def stack_mass(values, k: int, m: int) -> np.ndarray:
     """``M`` ``(m, k, k)`` from the values of its entries in row-major order, each ``(m,)``
     or one number for every row."""
-    return np.stack([np.broadcast_to(v, (m,)) for v in values[:k * k]],
-                    axis=-1).reshape(m, k, k)
+    return stack_columns(values[:k * k], m).reshape(m, k, k)
+
+
+def stack_columns(values, m: int) -> np.ndarray:
+    """``(m, len(values))`` from values that are each ``(m,)`` or one number for every row
+    (only those are broadcast: ``np.broadcast_to`` costs more than the rest of a
+    one-sample right-hand side's stacking, and an adaptive integrator makes hundreds of
+    thousands of such calls)."""
+    return np.stack([v if getattr(v, "shape", None) == (m,) else np.broadcast_to(v, (m,))
+                     for v in values], axis=-1)
 
 
 def solve_mass(matrix: np.ndarray, b: np.ndarray, x: np.ndarray, state_names) -> np.ndarray:
