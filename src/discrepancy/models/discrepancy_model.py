@@ -20,13 +20,14 @@ from ..data.trajectory import Trajectory, as_2d, as_trajectories, is_number
 from ..data.validation import as_float_array, check_vector
 from ..differentiation import Differentiator
 from ..errors import DataError, ParameterError, ShapeError, describe
+from ..expression_tape import compile_numpy_many
 from ..fitting.distributed import dask_statistics
 from ..fitting.setup import FitSetup
 from ..fitting.streaming import chunk_statistics
 from ..libraries import FeatureLibrary
 from ..optimizers import GramStatistics, Optimizer
 from ..optimizers.wrapped import REGRESSOR
-from ..symbolic import compile_numpy, feature_name
+from ..symbolic import feature_name
 from .core.arguments import keywords_only, require_t
 from .core.checks import checked_discrepancy, pairs
 from .core.conditioning import warn_if_ill_conditioned
@@ -254,8 +255,10 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         """Compile the active terms of ``coef_`` (kept as ``_compiled_coef`` to notice edits)."""
         active = np.flatnonzero(np.any(self.coef_ != 0, axis=0))
         functions = self.setup_.library.user_functions()
-        self._active_terms = [compile_numpy(self.feature_expressions_[j], self.variable_names_,
-                                            functions) for j in active]
+        # one tape for all the active terms (a subexpression they share is computed once)
+        self._active_terms = compile_numpy_many(
+            [self.feature_expressions_[j] for j in active], self.variable_names_,
+            functions) if len(active) else None
         self._active_coef = self.coef_[:, active].T
         self._compiled_coef = self.coef_.copy()
         self._compiled_steps = {}   # CasADi steppers of these coefficients, by substeps
@@ -302,9 +305,9 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         return x, as_2d("u", u, n_rows=x.shape[0], n_cols=self.n_inputs_, allow_1d=True)
 
     def _g(self, z: np.ndarray) -> np.ndarray:
-        if not self._active_terms:
+        if self._active_terms is None:
             return np.zeros((z.shape[0], self.n_states_))
-        theta = np.column_stack([f(z) for f in self._active_terms])
+        theta = np.column_stack(self._active_terms(z))
         return theta @ self._active_coef
 
     def discrepancy(self, x, u=None) -> np.ndarray:

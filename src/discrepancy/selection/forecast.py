@@ -31,8 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..runge_kutta import runge_kutta_step
 from ..expression_tape import compile_numpy_many
+from ..runge_kutta import runge_kutta_step
 
 #: scaled squared error given to a lead once a forecast has diverged (10 standard deviations)
 CAP = 100.0

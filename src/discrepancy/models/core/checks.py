@@ -33,7 +33,7 @@ def checked_discrepancy(model, z: np.ndarray) -> np.ndarray:
         g = model._g(z)
     if not np.all(np.isfinite(g)):
         active = np.flatnonzero(np.any(model.coef_ != 0, axis=0))
-        theta = np.column_stack([f(z) for f in model._active_terms])
+        theta = np.column_stack(model._active_terms(z))
         names = model.get_feature_names()
         raise not_finite(theta.T, z, 0, len(active), Names([names[j] for j in active],
                                                            model.variable_names_))
