@@ -55,8 +55,8 @@ def _cholesky_solve(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     threshold of ``scipy.linalg.solve(a, b, assume_a="pos")`` (a 1 x 1 system divides), and
     the answers and the refusals were the same on 20,000 random systems of up to 24
     unknowns, many singular or nearly; without scipy's checks, broadcasting and warning
-    machinery a 10 x 10 solve takes 2 µs instead of 34, and the selection paths solve
-    hundreds of thousands of such systems."""
+    machinery a 10 x 10 solve takes 13 µs instead of 38 (its refusal test included), and
+    the selection paths solve hundreds of thousands of such systems."""
     if a.shape[0] == 0:
         return b.copy()
     if a.shape[0] == 1:
