@@ -6,12 +6,14 @@ import warnings
 import numpy as np
 import pysindy as ps
 import pytest
+import scipy.linalg
 from hypothesis import given
 from hypothesis import strategies as st
 from sklearn.linear_model import Lasso as SklearnLasso
 
 import discrepancy as dc
 from discrepancy.errors import NotFittedError, ParameterError, ShapeError
+from discrepancy.optimizers.base import _cholesky_solve
 
 
 def problem(seed, m=300, p=10, n=3, noise=0.01, spread=True):
@@ -284,10 +286,6 @@ def test_the_hand_written_cholesky_gives_scipys_answers_and_refusals():
     assume_a="pos")`` does, to the last bit, and refuses exactly the systems scipy calls
     singular or warns about (random sizes 1-12, columns scaled over 16 decades, a third of
     them with two nearly equal columns)."""
-    import scipy.linalg
-
-    from discrepancy.optimizers.base import _cholesky_solve
-
     def by_scipy(a, b):
         try:
             with warnings.catch_warnings():
