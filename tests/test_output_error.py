@@ -6,7 +6,7 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 import discrepancy as dc
-from discrepancy.errors import DataError, ShapeError, UnknownNameError
+from discrepancy.errors import ConvergenceError, DataError, ShapeError, UnknownNameError
 
 pytest.importorskip("casadi")
 
@@ -96,6 +96,19 @@ def test_refine_and_a_new_records_initial_state(oscillator):
     later = slice(400, 450)                                  # a record starting elsewhere
     x0 = model.estimate_initial_state(y[later], t=t[later], u=u[later], outputs=["pos"])
     np.testing.assert_allclose(x0, x[400], atol=0.03)
+
+
+def test_refine_from_a_model_whose_simulation_diverges_says_so(oscillator):
+    """A spring that hardens the wrong way (+2 pos^3) blows up within 4 s of the record:
+    output error has no slope to follow from there, and says so."""
+    t, u, x, y = oscillator
+    model = oscillator_model(optimizer=dc.STLSQ(threshold=0.0)).fit(
+        x, t=t, u=u, x_dot=np.gradient(x, t, axis=0))
+    coef = np.zeros_like(model.coef_)
+    coef[1, model.get_feature_names().index("pos^3")] = 2.0
+    diverging = model.with_coefficients(coef)
+    with pytest.raises(ConvergenceError, match="diverges on record 0"):
+        diverging.refine(y, t=t, u=u, outputs=["pos"])
 
 
 def test_bad_output_error_inputs_are_named(oscillator):

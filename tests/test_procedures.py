@@ -1,8 +1,11 @@
 """Libraries chosen by forecasts inside the training data (choose_procedure) and the
 default candidates, against systems whose missing law is known."""
+import warnings
+
 import numpy as np
 import pytest
 import sympy as sp
+from scipy.integrate import solve_ivp
 
 import discrepancy as dc
 from discrepancy.selection.candidate_libraries import (
@@ -158,3 +161,38 @@ def test_procedure_figure_has_one_column_per_candidate(friction_records):
     fig = procedure_figure(choice)
     labels = [tick.get_text() for tick in fig.axes[0].get_xticklabels()]
     assert [label.split("\n")[0] for label in labels] == ["prior alone", "linear", "cubic"]
+
+
+@pytest.mark.slow
+def test_output_forecasts_survive_a_candidate_whose_first_fit_diverges_later():
+    """A positioning axis in closed loop (position measured, force input, Coulomb friction
+    the prior lacks): the degree-3 candidate fitted on half of the record diverges on the
+    longer parts, where its refit cannot start. It loses with infinite forecast errors (its
+    whole procedure is run there instead); it used to stop the search with scipy's error."""
+    pytest.importorskip("casadi")
+    t = np.arange(3000) * 0.02
+    rng = np.random.default_rng(0)
+    phase = rng.uniform(0, 2 * np.pi, 3)
+    reference = lambda s: (np.sin(0.3 * s + phase[0]) + 0.5 * np.sin(0.77 * s + phase[1])  # noqa: E731
+                           + 0.3 * np.sin(1.9 * s + phase[2]))
+
+    def axis(s, z):
+        force = 20 * (reference(s) - z[0]) - 6 * z[1]
+        return [z[1], force - 2 * z[1] - 0.6 * np.tanh(z[1] / 0.01) + 0.1]
+
+    q, v = solve_ivp(axis, (0, t[-1]), [0, 0], t_eval=t, max_step=0.005, rtol=1e-8,
+                     atol=1e-10).y
+    force = 20 * (reference(t) - q) - 6 * v
+    y = q + 0.002 * rng.standard_normal(q.size)
+    pos, vel, u = sp.symbols("q v u", real=True)
+    model = dc.DiscrepancyModel(prior=[vel, (u - 1.8 * vel) / 1.05], state_names=["q", "v"],
+                                input_names=["u"],
+                                constraints=dc.Constraints(exact_equations=["q"]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)   # no invalid arithmetic on inf
+        choice = dc.choose_procedure(model, y[:, None], t=0.02, u=force[:, None],
+                                     outputs=["q"], candidates={"cubic": dc.PolynomialLibrary(3)},
+                                     join=False, holds=["linear"], progress=False)
+    assert choice.scores["cubic"]["forecast_errors"] == [np.inf] * 3
+    assert np.isnan(choice.scores["cubic"]["se"])
+    assert choice.chosen == "prior alone" and choice.model.prior_only_

@@ -185,7 +185,8 @@ class _Contest:
             last = judge.last
             self.scores[name] = {
                 "forecast_errors": errors, "mean": float(np.mean(errors)),
-                "se": float(np.std(errors, ddof=1) / np.sqrt(len(errors))),
+                "se": float(np.std(errors, ddof=1) / np.sqrt(len(errors)))
+                if np.isfinite(errors).all() else float("nan"),
                 "n_terms": 0 if last is None else int(np.count_nonzero(last.coef_)),
                 "prior_only": last is None or bool(last.prior_only_), "round": round_name}
             self.entries[name] = (template, settings)

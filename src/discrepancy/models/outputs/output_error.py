@@ -215,17 +215,23 @@ class OutputErrorFit:
     def set_coef_scale(self, x0s):
         """Scale of each coefficient: its equation's derivative scale over its column's RMS
         along the simulation of the fixed part (the prior, or the model being refitted), so
-        that scaled sizes compare across terms."""
-        theta_rms, dx_rms = [], []
-        for x0, r in zip(x0s, self.records, strict=True):
+        that scaled sizes compare across terms. A simulation that diverges counts up to its
+        last finite sample (a scale of 1 where nothing is finite). Returns the indices of
+        the records whose simulation diverged."""
+        theta_rms, dx_rms, diverged = [], [], []
+        for i, (x0, r) in enumerate(zip(x0s, self.records, strict=True)):
             states = self.shooting.simulate(x0, r.stages, r.h, self.fixed)
-            theta_rms.append(np.mean(self.shooting.theta(states, r.u) ** 2, axis=0))
-            dx_rms.append(np.mean((np.diff(states, axis=0) / r.h[:, None]) ** 2, axis=0))
-        theta = np.sqrt(np.mean(theta_rms, axis=0))
-        dx = np.sqrt(np.mean(dx_rms, axis=0))
-        dx = np.where(dx > 0, dx, max(float(dx.max()), 1.0))
+            if not np.isfinite(states).all():
+                diverged.append(i)
+            theta = self.shooting.theta(states, r.u)
+            dx = np.diff(states, axis=0) / r.h[:, None]
+            theta_rms.append(_finite_mean_square(theta))
+            dx_rms.append(_finite_mean_square(dx))
+        theta, dx = _pooled_rms(theta_rms), _pooled_rms(dx_rms)
+        dx = np.where(dx > 0, dx, max(float(np.nan_to_num(dx).max()), 1.0))
         theta = np.where(theta > 0, theta, 1.0)
         self.coef_scale = (dx[:, None] / theta[None, :]).ravel()
+        return diverged
 
     def compensated(self, coef, dropped, x0s) -> np.ndarray:
         """A start for the support without the ``dropped`` terms: the remaining terms of each
@@ -253,6 +259,24 @@ class OutputErrorFit:
 #: into the exact derivatives the fit differentiates (10,000 on 3 samples did not finish
 #: building in 20 s); finer steps belong in a resampled record
 MAX_SUBSTEPS = 100
+
+
+def _finite_mean_square(values) -> np.ndarray:
+    """Mean square of each column of ``values`` over its finite rows (NaN if none)."""
+    finite = np.isfinite(values).all(axis=1)
+    if not finite.any():
+        return np.full(values.shape[1], np.nan)
+    return np.mean(values[finite] ** 2, axis=0)
+
+
+def _pooled_rms(mean_squares) -> np.ndarray:
+    """Root of the mean over records of per-record mean squares, records without finite
+    samples left out (NaN where no record has any)."""
+    stacked = np.asarray(mean_squares)
+    counted = np.isfinite(stacked)
+    total = np.where(counted, stacked, 0.0).sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.sqrt(np.where(counted.any(axis=0), total / counted.sum(axis=0), np.nan))
 
 
 def records_of(model, y, t, u, substeps, hold):

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...constraints import Integral, Interval, Real, check_argument
-from ...errors import ParameterError, ShapeError
+from ...errors import ConvergenceError, ParameterError, ShapeError
 from ...hybrid.outputs import OutputMap
 from ...optimizers.selection import one_standard_error
 from .initial_states import best_start, candidates, warn_if_poor
@@ -230,7 +230,12 @@ def refit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, c
     fit, x0s, everything = prepare(model.setup_, records, outputs=outputs, x0=x0,
                                    x0_bounds=x0_bounds, substeps=substeps, free=support)
     fit.fixed = model.coef_.copy()
-    fit.set_coef_scale(x0s)
+    diverged = fit.set_coef_scale(x0s)
+    if diverged:           # no slope to follow from a start whose simulation is not finite
+        raise ConvergenceError(
+            f"the model's simulation from its initial state diverges on record "
+            f"{diverged[0]} of these data, and output error cannot start from a simulation "
+            "that is not finite: start from a model (or x0=) whose simulation stays finite")
     coef, x0s, _ = fit.solve(support, model.coef_, x0s, everything, 0.0)
     if coefficients:
         fit.covariance = fit.coefficient_covariance(support, coef, x0s, everything)
