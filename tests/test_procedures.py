@@ -102,6 +102,23 @@ def test_an_exact_prior_wins_against_every_library(helpers):
     assert choice.scores[choice.chosen]["n_terms"] == 0
 
 
+def test_a_larger_library_that_keeps_the_same_terms_loses_the_tie(friction_records):
+    """Both libraries hold the Coulomb term and both keep just it: the one with fewer
+    candidate terms is named, whichever comes first."""
+    xs, us = friction_records
+    x = np.vstack(xs)
+    friction = friction_library({"x2": x[:, 1]})
+    candidates = {"cubic + friction": dc.PolynomialLibrary(3) + friction,
+                  "linear + friction": dc.PolynomialLibrary(1) + friction}
+    choice = dc.choose_procedure(dc.DiscrepancyModel(prior=forced_oscillator), xs, t=0.01,
+                                 u=us, candidates=candidates, join=False, progress=False)
+    kept = {k: choice.scores[k]["n_terms"] for k in candidates}
+    assert kept == {"cubic + friction": 1, "linear + friction": 1}
+    assert choice.chosen == "linear + friction"
+    sizes = [choice.scores[k]["library_size"] for k in candidates]
+    assert sizes[0] > sizes[1] > 0 == choice.scores["prior alone"]["library_size"]
+
+
 def test_velocity_like_states_come_from_the_prior():
     q, v, w = sp.symbols("q v w")
     assert velocity_states([v, -q, -w], ["q", "v", "w"], None) == ["v"]

@@ -17,8 +17,9 @@ grows, the last forecast ends where the data end). The candidates are entered in
    straight line nor a step).
 
 The candidate with the best mean forecast over every round wins by the one-standard-error
-rule over the origins, the fewest terms first among ties and then the default input hold
-(another hold must forecast better by more than a standard error), and its whole procedure
+rule over the origins, the fewest terms first among ties, then the default input hold
+(another hold must forecast better by more than a standard error), then the smaller library
+(a union whose terms all come from one of its parts is that part), and its whole procedure
 is run again on all the data. Nothing but the data given is read, so a test record kept apart
 stays unseen.
 
@@ -64,7 +65,8 @@ class ProcedureChoice:
     Attributes:
         chosen: name of the chosen candidate; model: it, fitted on all the data.
         scores: per candidate ``{"forecast_errors": [per origin], "mean", "se", "n_terms"
-            (fitted on the largest training part), "prior_only", "round"}``; errors are mean
+            (fitted on the largest training part), "library_size" (its candidate terms, states x
+            features; 0 for the prior alone), "prior_only", "round"}``; errors are mean
             scaled squared errors (each state or output divided by its standard deviation);
             ``round`` says where the candidate came from (``"given"``, ``"joined"`` or
             ``"input hold"``, module doc).
@@ -188,6 +190,8 @@ class _Contest:
                 "se": float(np.std(errors, ddof=1) / np.sqrt(len(errors)))
                 if np.isfinite(errors).all() else float("nan"),
                 "n_terms": 0 if last is None else int(np.count_nonzero(last.coef_)),
+                "library_size": 0 if last is None or last.prior_only_
+                else int(last.coef_.size),
                 "prior_only": last is None or bool(last.prior_only_), "round": round_name}
             self.entries[name] = (template, settings)
 
@@ -200,9 +204,11 @@ class _Contest:
             raise ConvergenceError("every candidate's forecasts diverged on these data")
         mean = np.where(finite, mean, np.inf)
         margin = np.maximum(np.nan_to_num(se, nan=0.0), TOLERANCE * mean[finite].min())
-        # simplest first: fewest terms, then the default input hold
+        # simplest first: fewest terms, then the default input hold, then the smaller
+        # library (a union that kept only one library's terms is that library)
         sizes = [(self.scores[k]["n_terms"],
-                  self.entries[k][1].get("u_hold", DEFAULT_HOLD) != DEFAULT_HOLD)
+                  self.entries[k][1].get("u_hold", DEFAULT_HOLD) != DEFAULT_HOLD,
+                  self.scores[k]["library_size"])
                  for k in names]
         return names[one_standard_error(mean, margin, sizes)]
 
