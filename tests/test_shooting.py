@@ -96,6 +96,34 @@ def test_sensitivities_equal_central_differences_of_the_simulation(pieces):
         np.testing.assert_allclose(sens.d_x0[:, :, j], numeric, rtol=1e-5, atol=1e-8)
 
 
+def test_a_tank_starting_empty_has_finite_sensitivities_to_its_coefficients():
+    """``h' = 0.8 u - 0.5 sqrt(h)`` from ``h = 0``, where the outflow's slope is infinite:
+    that first step counts as flat in ``h`` instead of spreading NaN through every later
+    step, so the sensitivities to the coefficients (finite: the inflow lifts the level off
+    0 within the step) equal central differences of the simulation at every sample."""
+    level, inflow = sp.symbols("h u", real=True)
+    tank = dc.DiscrepancyModel(prior=[0.8 * inflow - 0.5 * sp.sqrt(level)],
+                               state_names=["h"], input_names=["u"],
+                               feature_library=dc.PolynomialLibrary(1))
+    t = np.arange(200) * 0.5
+    u = 1 + 0.5 * np.sin(0.1 * t)
+    records, _ = records_of(tank, t[:, None] * 0, t, u, 4, "linear")
+    fit, _, _ = prepare(tank.make_setup(1, 1), records, outputs=["h"], x0=None,
+                        x0_bounds=None, substeps=4)
+    record, coef, x0 = records[0], np.zeros((1, 3)), np.zeros(1)
+    sens = fit.shooting.sensitivities(x0, record.stages, record.h, coef)
+    assert np.all(np.isfinite(sens.d_coef)) and np.all(np.isfinite(sens.d_x0))
+    eps = 1e-6
+    for index in range(3):                                   # 1, h, u
+        up, down = coef.copy(), coef.copy()
+        up[0, index] += eps
+        down[0, index] -= eps
+        numeric = (fit.shooting.simulate(x0, record.stages, record.h, up)
+                   - fit.shooting.simulate(x0, record.stages, record.h, down)) / (2 * eps)
+        np.testing.assert_allclose(sens.d_coefficients(np.array([index]))[:, 0, 0],
+                                   numeric[:, 0], rtol=1e-5, atol=1e-8)
+
+
 def test_only_free_coefficients_have_sensitivities(pieces):
     fit, record, coef = pieces
     assert list(fit.shooting.free) == list(range(10, 20))    # the position's law is exact

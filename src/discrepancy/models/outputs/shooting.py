@@ -206,11 +206,25 @@ def _sensitivity_step(step, n: int, free: np.ndarray):
     s_x = ca.reshape(z[n:n + n * n], n, n)
     s_c = ca.reshape(z[n + n * n:], n, len(free))
     nxt = step(x, cols, h, c)
-    a = ca.jacobian(nxt, x)
-    b = ca.jacobian(nxt, ca.vertcat(*[c[int(i)] for i in free])) if len(free) \
-        else ca.SX(n, 0)
+    a = _flat_where_infinite(ca.jacobian(nxt, x))
+    b = _flat_where_infinite(ca.jacobian(nxt, ca.vertcat(*[c[int(i)] for i in free]))) \
+        if len(free) else ca.SX(n, 0)
     out = ca.vertcat(nxt, ca.vec(ca.mtimes(a, s_x)), ca.vec(ca.mtimes(a, s_c) + b))
     return ca.Function("sensitive_step", [z, cols, h, c], [out])
+
+
+def _flat_where_infinite(jacobian):
+    """``jacobian`` with each entry that evaluates to an infinite or undefined slope (a
+    square root at 0, a kink) set to 0 in that step, so the step counts as flat there
+    instead of spreading NaN through every later step's sensitivities (which would leave
+    the fit without any slope to follow). Its sparsity is kept, so a step whose slopes are
+    finite gives the same numbers."""
+    ca = casadi_module()
+    out = ca.SX(jacobian.sparsity())
+    for k in range(jacobian.nnz()):
+        entry = jacobian.nz[k]
+        out.nz[k] = ca.if_else(ca.fabs(entry) < np.inf, entry, 0)
+    return out
 
 
 def _uses(jacobian) -> np.ndarray:
