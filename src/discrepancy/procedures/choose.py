@@ -20,8 +20,10 @@ The candidate with the best mean forecast over every round wins by the one-stand
 rule over the origins, the fewest terms first among ties, then the default input hold
 (another hold must forecast better by more than a standard error), then the smaller library
 (a union whose terms all come from one of its parts is that part), and its whole procedure
-is run again on all the data. Nothing but the data given is read, so a test record kept apart
-stays unseen.
+is run again on all the data. With outputs, its scored support (the fit the forecasts
+scored) is also refined on all the data, and taken instead when it fits them better with no
+more terms (``final_route`` says which). Nothing but the data given is read, so a test record
+kept apart stays unseen.
 
 Forecasts: with every state measured (``fit``), from the state at the origin over the
 horizon (a quarter of the shortest record unless given), scored as the model's own
@@ -74,6 +76,7 @@ class ProcedureChoice:
             ``u_hold``): simulate the model with the same ``u_hold`` and ``substeps``.
         origins: each origin as a share of the records; horizon: forecast length in samples
             (``None``: to each record's end).
+        final_route: how ``model`` was fitted on all the data (module doc).
     """
 
     chosen: str
@@ -82,6 +85,7 @@ class ProcedureChoice:
     settings: dict = field(default_factory=dict, repr=False)
     origins: list = field(default_factory=list)
     horizon: int | None = None
+    final_route: str = "its whole procedure on all the data"
 
     def table(self) -> str:
         """A text table, one line per candidate: its name, terms, mean forecast error (scaled
@@ -91,7 +95,7 @@ class ProcedureChoice:
             mark = "  <- chosen" if name == self.chosen else ""
             lines.append(f"{name:<40} {row['n_terms']:>5} {row['mean']:>14.5g} "
                          f"{row['se']:>9.2g}{mark}")
-        return "\n".join(lines)
+        return "\n".join([*lines, f"the chosen model: {self.final_route}"])
 
 
 #: ``holds=``: a list of input holds
@@ -152,9 +156,9 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
                               "input hold", {**fit_kws, "u_hold": hold})
     pick = contest.pick()
     template, settings = contest.entries[pick]
-    final = contest.judge(settings).fit(template, 1.0)
+    final, route = contest.judge(settings).final(template)
     return ProcedureChoice(pick, final, contest.scores, settings,
-                           contest.fractions.tolist(), contest.judge(settings).horizon)
+                           contest.fractions.tolist(), contest.judge(settings).horizon, route)
 
 
 class _Contest:

@@ -31,6 +31,10 @@ class Judge:
         data = np.vstack([r.x for r in records])
         self.scale = np.where(data.std(axis=0) > 0, data.std(axis=0), 1.0)
 
+    def final(self, template):
+        """``(model, route)``: ``template`` fitted on all the data, and how."""
+        return self.fit(template, 1.0), "its whole procedure on all the data"
+
     def fit(self, template, fraction):
         """A clone of ``template`` fitted on the first ``fraction`` of every record."""
         parts = [head(r, fraction) for r in self.records]

@@ -17,6 +17,7 @@ keeps 6).
 """
 from __future__ import annotations
 
+import copy
 import warnings
 
 import numpy as np
@@ -27,6 +28,11 @@ from ..hybrid.outputs import OutputMap
 from ..models.outputs.output_checks import simulate_quietly
 from ..models.outputs.output_fit import refit_outputs
 from .judges import Judge, head
+
+#: how :meth:`OutputForecasts.final` made the chosen model
+WHOLE = "its whole procedure on all the data"
+SCORED = ("its scored support refined on all the data (the whole procedure's fit was worse "
+          "there with as many terms or more)")
 
 
 class OutputForecasts(Judge):
@@ -56,6 +62,32 @@ class OutputForecasts(Judge):
                              self.outputs, self.fit_kws)
         except ConvergenceError:   # its first model diverges on these data: start afresh
             return super().fit(template, fraction)
+
+    def final(self, template):
+        """``(model, route)``: ``template``'s whole procedure on all the data; or, when its
+        scored support (the fit at the first origin) refined on all the data fits them
+        better with no more terms, that (the whole procedure's search stopped in a poorer
+        minimum: a procedure scored by one fit must not hand back a worse one)."""
+        whole = self.fit(template, 1.0)
+        first = self.proposed.get(id(template))
+        if first is None or first.prior_only_:
+            return whole, WHOLE
+        one = len(self.records) == 1
+        y, t, u = ([getattr(r, k) for r in self.records] for k in ("x", "t", "u"))
+        kw = {k: v for k, v in self.fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                scored = copy.deepcopy(first).refine(
+                    y[0] if one else y, t[0] if one else t,
+                    u=None if u[0] is None else (u[0] if one else u), outputs=self.outputs,
+                    x0=first.x0_, **kw)
+            except ConvergenceError:
+                return whole, WHOLE
+        fewer = np.count_nonzero(scored.coef_) <= np.count_nonzero(whole.coef_)
+        if fewer and scored.output_error_ < whole.output_error_:
+            return scored, SCORED
+        return whole, WHOLE
 
     def score(self, template, fraction) -> float:
         """Mean scaled squared output error of the fitted simulation after the origin at
