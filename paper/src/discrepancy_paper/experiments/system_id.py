@@ -63,6 +63,7 @@ def blind_results(choice, test_error: float, unit: str, cpu_seconds: float,
     return {f"test_rms_error_{unit}": test_error,
             "number_of_terms": int(choice.model.complexity),
             "chosen_candidate": choice.chosen,
+            "chosen_model_fitted_by": choice.final_route,
             "candidate_scores": {name: {"mean_forecast_error": row["mean"],
                                         "standard_error": row["se"],
                                         "forecast_error_per_origin": row["forecast_errors"],
@@ -87,10 +88,12 @@ def blind_text(rep, choice, test_error: float, unit: str, cpu_seconds: float,
              "and, where the benchmark does not fix how the input moves between samples, the "
              "best candidate with each other input hold; each scored by rolling-origin output "
              "forecasts inside the estimation record, the winner's whole procedure run again "
-             "on all of it. Nothing here was chosen after seeing test data.")
+             "on all of it (or its scored fit refined on all of it, when that fits the "
+             "estimation record better with no more terms). Nothing here was chosen after "
+             "seeing test data.")
     rep.text(f"**Test RMS error: {test_error:.3f} {unit}**, {choice.model.complexity} "
-             f"discrepancy terms, chosen candidate: **{choice.chosen}**; "
-             f"{cpu_seconds:.0f} CPU seconds.")
+             f"discrepancy terms, chosen candidate: **{choice.chosen}**, fitted by "
+             f"{choice.final_route}; {cpu_seconds:.0f} CPU seconds.")
     rep.table(["candidate", "terms (fitted on the largest part)", "forecast error (scaled MSE)",
                "± s.e.", ""],
               [[name, row["n_terms"], f"{row['mean']:.4g}", f"{row['se']:.2g}",
