@@ -213,6 +213,7 @@ def test_output_forecasts_survive_a_candidate_whose_first_fit_diverges_later():
     assert choice.scores["cubic"]["forecast_errors"] == [np.inf] * 3
     assert np.isnan(choice.scores["cubic"]["se"])
     assert choice.chosen == "prior alone" and choice.model.prior_only_
+    assert np.shape(choice.model.x0_) == (2,)                 # one record: one state
 
 
 @pytest.mark.slow
@@ -256,6 +257,7 @@ def test_the_chosen_output_model_fits_its_data_no_worse_than_the_fit_its_forecas
         prior = dc.base.clone(model).set_params(optimizer="prior_only").fit_outputs(
             y[:, None], **fits)
     assert choice.chosen == "hinges" and choice.final_route.startswith("its scored support")
+    assert np.shape(choice.model.x0_) == np.shape(whole.x0_) == (2,)
     assert np.count_nonzero(choice.model.coef_) < np.count_nonzero(whole.coef_)
     assert choice.model.output_error_ < whole.output_error_
 

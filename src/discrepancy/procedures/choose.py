@@ -157,6 +157,8 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     pick = contest.pick()
     template, settings = contest.entries[pick]
     final, route = contest.judge(settings).final(template)
+    if not isinstance(x, (list, tuple)) and isinstance(getattr(final, "x0_", None), list):
+        final.x0_ = final.x0_[0]                 # one record given: one state, as fit gives
     return ProcedureChoice(pick, final, contest.scores, settings,
                            contest.fractions.tolist(), contest.judge(settings).horizon, route)
 
