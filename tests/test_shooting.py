@@ -98,7 +98,7 @@ def test_sensitivities_equal_central_differences_of_the_simulation(pieces):
 
 def test_a_tank_starting_empty_has_finite_sensitivities_to_its_coefficients():
     """``h' = 0.8 u - 0.5 sqrt(h)`` from ``h = 0``, where the outflow's slope is infinite:
-    that first step counts as flat in ``h`` instead of spreading NaN through every later
+    that first step carries its state over instead of spreading NaN through every later
     step, so the sensitivities to the coefficients (finite: the inflow lifts the level off
     0 within the step) equal central differences of the simulation at every sample."""
     level, inflow = sp.symbols("h u", real=True)

@@ -206,24 +206,26 @@ def _sensitivity_step(step, n: int, free: np.ndarray):
     s_x = ca.reshape(z[n:n + n * n], n, n)
     s_c = ca.reshape(z[n + n * n:], n, len(free))
     nxt = step(x, cols, h, c)
-    a = _flat_where_infinite(ca.jacobian(nxt, x))
-    b = _flat_where_infinite(ca.jacobian(nxt, ca.vertcat(*[c[int(i)] for i in free]))) \
-        if len(free) else ca.SX(n, 0)
+    a = _finite_or(ca.jacobian(nxt, x), np.eye(n))
+    b = _finite_or(ca.jacobian(nxt, ca.vertcat(*[c[int(i)] for i in free])),
+                   np.zeros((n, len(free)))) if len(free) else ca.SX(n, 0)
     out = ca.vertcat(nxt, ca.vec(ca.mtimes(a, s_x)), ca.vec(ca.mtimes(a, s_c) + b))
     return ca.Function("sensitive_step", [z, cols, h, c], [out])
 
 
-def _flat_where_infinite(jacobian):
-    """``jacobian`` with each entry that evaluates to an infinite or undefined slope (a
-    square root at 0, a kink) set to 0 in that step, so the step counts as flat there
-    instead of spreading NaN through every later step's sensitivities (which would leave
-    the fit without any slope to follow). Its sparsity is kept, so a step whose slopes are
-    finite gives the same numbers."""
+def _finite_or(jacobian, carry: np.ndarray):
+    """``jacobian`` of one step with each entry that evaluates to an infinite or undefined
+    slope (a square root at 0, ``sqrt(max(0, h))`` below 0: inf times 0) replaced by
+    ``carry``'s: the identity for the state (that step carries its state over and only its
+    increment, of the order of the step, counts as flat), zero for the coefficients. Without
+    this, one such step spreads NaN through every later sensitivity and leaves the fit no
+    slope to follow. Sparsity is kept, so finite steps give the same numbers."""
     ca = casadi_module()
     out = ca.SX(jacobian.sparsity())
-    for k in range(jacobian.nnz()):
+    rows, cols = jacobian.sparsity().get_triplet()
+    for k, (i, j) in enumerate(zip(rows, cols, strict=True)):
         entry = jacobian.nz[k]
-        out.nz[k] = ca.if_else(ca.fabs(entry) < np.inf, entry, 0)
+        out.nz[k] = ca.if_else(ca.fabs(entry) < np.inf, entry, float(carry[i, j]))
     return out
 
 
