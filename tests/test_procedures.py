@@ -251,7 +251,8 @@ def test_the_chosen_output_model_fits_its_data_no_worse_than_the_fit_its_forecas
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         choice = dc.choose_procedure(model, y[:, None], candidates={"hinges": hinges},
-                                     join=False, holds=["linear"], progress=False, **fits)
+                                     join=False, holds=["linear"], n_origins=2, progress=False,
+                                     **fits)
         whole = dc.base.clone(model).set_params(feature_library=hinges).fit_outputs(
             y[:, None], **fits)
         prior = dc.base.clone(model).set_params(optimizer="prior_only").fit_outputs(
