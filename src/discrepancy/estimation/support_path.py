@@ -10,7 +10,10 @@ comes from block means (errors of a misfitted model are correlated in time). The
 the sparsest support whose score is within one standard error of the best's, the standard
 error of the *difference* taken over the same blocks (paired: the blocks a disturbance
 makes hard are hard for every support, and cancel), or within ``tolerance`` (relative) of
-the best score.
+the best score. Without ``tolerance``, a chosen support must also forecast better than the
+prior alone in a clear majority of the blocks (a sign test), else the prior alone is
+kept: under strong process noise one block can carry a mean gain of terms the system does
+not have.
 
 Seam: :func:`choose` is the one place that turns scored supports into a choice, so a
 general forecast-based selection (scoring several origins and lead times) can replace it
@@ -21,9 +24,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import binomtest
 
 #: contiguous blocks per record for the standard error of a held-out score
 SCORE_BLOCKS = 8
+#: one-sided level of the sign test a support must pass against the prior alone: with one
+#: record's 8 blocks, it must forecast better in at least 7
+SIGN_LEVEL = 0.05
 
 
 @dataclass
@@ -81,7 +88,23 @@ def choose(path: list[SupportScore], tolerance: float | None = None) -> SupportS
         excess, se = mean_and_se(s.heldout_blocks - best.heldout_blocks)
         return excess <= se
 
-    return min((s for s in path if close(s)), key=lambda s: (s.n_terms, s.heldout_score))
+    pick = min((s for s in path if close(s)), key=lambda s: (s.n_terms, s.heldout_score))
+    return pick if tolerance is not None else _unless_no_clear_gain(pick, path)
+
+
+def _unless_no_clear_gain(pick: SupportScore, path: list[SupportScore]) -> SupportScore:
+    """The prior alone instead of ``pick`` when ``pick`` does not forecast better in a clear
+    majority of the held-out blocks (a one-sided sign test at :data:`SIGN_LEVEL`): a mean
+    gain that one block carries (a disturbance the terms happened to follow) is not a
+    reason to leave the prior."""
+    prior = next((s for s in path if s.n_terms == 0), None)
+    if pick.n_terms == 0 or prior is None or pick.heldout_blocks is None \
+            or prior.heldout_blocks is None:
+        return pick
+    wins = int(np.sum(pick.heldout_blocks < prior.heldout_blocks))
+    n = len(prior.heldout_blocks)
+    return pick if binomtest(wins, n, 0.5, alternative="greater").pvalue <= SIGN_LEVEL \
+        else prior
 
 
 def drop_least(support: np.ndarray, importance: np.ndarray,
