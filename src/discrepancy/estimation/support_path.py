@@ -24,13 +24,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import binomtest
+
+from ..optimizers.selection import clearly_better
 
 #: contiguous blocks per record for the standard error of a held-out score
 SCORE_BLOCKS = 8
-#: one-sided level of the sign test a support must pass against the prior alone: with one
-#: record's 8 blocks, it must forecast better in at least 7
-SIGN_LEVEL = 0.05
 
 
 @dataclass
@@ -94,17 +92,12 @@ def choose(path: list[SupportScore], tolerance: float | None = None) -> SupportS
 
 def _unless_no_clear_gain(pick: SupportScore, path: list[SupportScore]) -> SupportScore:
     """The prior alone instead of ``pick`` when ``pick`` does not forecast better in a clear
-    majority of the held-out blocks (a one-sided sign test at :data:`SIGN_LEVEL`): a mean
-    gain that one block carries (a disturbance the terms happened to follow) is not a
-    reason to leave the prior."""
+    majority of the held-out blocks (:func:`~discrepancy.optimizers.selection.clearly_better`)."""
     prior = next((s for s in path if s.n_terms == 0), None)
     if pick.n_terms == 0 or prior is None or pick.heldout_blocks is None \
             or prior.heldout_blocks is None:
         return pick
-    wins = int(np.sum(pick.heldout_blocks < prior.heldout_blocks))
-    n = len(prior.heldout_blocks)
-    return pick if binomtest(wins, n, 0.5, alternative="greater").pvalue <= SIGN_LEVEL \
-        else prior
+    return pick if clearly_better(pick.heldout_blocks, prior.heldout_blocks) else prior
 
 
 def drop_least(support: np.ndarray, importance: np.ndarray,

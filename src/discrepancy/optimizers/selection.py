@@ -27,6 +27,7 @@ import warnings
 from copy import copy
 
 import numpy as np
+from scipy.stats import binomtest
 
 from .base import refit_on_support, solve_normal
 from .gram import residual_sum
@@ -108,6 +109,23 @@ def one_standard_error(error, se, sizes) -> int:
     best = int(np.argmin(error))
     ok = [j for j in range(len(error)) if error[j] <= error[best] + se[best]]
     return min(ok, key=lambda j: (sizes[j], error[j]))
+
+
+#: one-sided level of the sign test a correction must pass against the prior alone
+SIGN_LEVEL = 0.05
+
+
+def clearly_better(errors, reference) -> bool:
+    """Whether ``errors`` (per held-out block or forecast window) are lower than the
+    ``reference``'s on the same blocks in a clear majority of them: a one-sided sign test
+    at :data:`SIGN_LEVEL` (with 8 blocks, 7 must be better). A mean gain that a few blocks
+    carry (a disturbance some terms happened to follow) fails it. Used by the
+    prediction-error choice (:mod:`discrepancy.estimation.support_path`, 8 blocks per
+    record); at fewer than 5 blocks no result can pass it."""
+    errors, reference = np.asarray(errors, float), np.asarray(reference, float)
+    wins = int(np.sum(errors < reference))
+    return bool(binomtest(wins, len(reference), 0.5, alternative="greater").pvalue
+                <= SIGN_LEVEL)
 
 
 def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.ndarray,
