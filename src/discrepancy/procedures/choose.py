@@ -56,7 +56,7 @@ from ..models.outputs.output_checks import prior_states, state_count
 from ..optimizers.selection import one_standard_error
 from ..selection.candidate_libraries import default_libraries
 from ..selection.choice import TOLERANCE
-from .judges import FIRST_ORIGIN, HORIZON_SHARE, StateForecasts
+from .judges import FIRST_ORIGIN, HORIZON_SHARE, WHOLE, StateForecasts
 from .output_forecasts import OutputForecasts
 
 
@@ -85,7 +85,7 @@ class ProcedureChoice:
     settings: dict = field(default_factory=dict, repr=False)
     origins: list = field(default_factory=list)
     horizon: int | None = None
-    final_route: str = "its whole procedure on all the data"
+    final_route: str = WHOLE
 
     def table(self) -> str:
         """A text table, one line per candidate: its name, terms, mean forecast error (scaled

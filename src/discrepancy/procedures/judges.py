@@ -18,6 +18,8 @@ from ..selection.horizon import sensitive_leads
 FIRST_ORIGIN = 0.5
 #: the forecast length of output fits, and the most of a record a state forecast takes
 HORIZON_SHARE = 0.25
+#: how :meth:`Judge.final` fits the chosen candidate on all the data
+WHOLE = "its whole procedure on all the data"
 
 
 class Judge:
@@ -33,7 +35,7 @@ class Judge:
 
     def final(self, template):
         """``(model, route)``: ``template`` fitted on all the data, and how."""
-        return self.fit(template, 1.0), "its whole procedure on all the data"
+        return self.fit(template, 1.0), WHOLE
 
     def fit(self, template, fraction):
         """A clone of ``template`` fitted on the first ``fraction`` of every record."""

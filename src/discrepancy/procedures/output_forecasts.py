@@ -27,10 +27,9 @@ from ..hybrid.inputs import DEFAULT_HOLD
 from ..hybrid.outputs import OutputMap
 from ..models.outputs.output_checks import simulate_quietly
 from ..models.outputs.output_fit import refit_outputs
-from .judges import Judge, head
+from .judges import WHOLE, Judge, head
 
-#: how :meth:`OutputForecasts.final` made the chosen model
-WHOLE = "its whole procedure on all the data"
+#: how :meth:`OutputForecasts.final` made the chosen model when not by :data:`.judges.WHOLE`
 SCORED = ("its scored support refined on all the data (the whole procedure's fit was worse "
           "there with as many terms or more)")
 
@@ -72,16 +71,13 @@ class OutputForecasts(Judge):
         first = self.proposed.get(id(template))
         if first is None or first.prior_only_:
             return whole, WHOLE
-        one = len(self.records) == 1
-        y, t, u = ([getattr(r, k) for r in self.records] for k in ("x", "t", "u"))
+        y, t, u = (_as_given([getattr(r, k) for r in self.records]) for k in ("x", "t", "u"))
         kw = {k: v for k, v in self.fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
-                scored = copy.deepcopy(first).refine(
-                    y[0] if one else y, t[0] if one else t,
-                    u=None if u[0] is None else (u[0] if one else u), outputs=self.outputs,
-                    x0=first.x0_, **kw)
+                scored = copy.deepcopy(first).refine(y, t, u=u, outputs=self.outputs,
+                                                     x0=first.x0_, **kw)
             except ConvergenceError:
                 return whole, WHOLE
         fewer = np.count_nonzero(scored.coef_) <= np.count_nonzero(whole.coef_)
@@ -119,12 +115,19 @@ def _refitted(first, y, t, u, outputs, fit_kws):
     """A copy of ``first`` (a model fitted by output error) with its support's
     coefficients and the initial states refitted on ``y`` by one output-error solve,
     starting from its own."""
-    one = len(y) == 1        # one record: as arrays, as it was fitted
     kw = {"x0_bounds": None, "u_hold": DEFAULT_HOLD, "substeps": 4,
           **{k: v for k, v in fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}}
-    coef, x0s, _ = refit_outputs(first, y[0] if one else y, t[0] if one else t,
-                                 None if u is None else (u[0] if one else u),
+    coef, x0s, _ = refit_outputs(first, _as_given(y), _as_given(t),
+                                 None if u is None else _as_given(u),
                                  outputs=outputs, x0=first.x0_, coefficients=True, **kw)
     model = first.with_coefficients(coef * (first.coef_ != 0))
-    model.x0_ = x0s[0] if one else list(x0s)
+    model.x0_ = _as_given(list(x0s))
     return model
+
+
+def _as_given(per_record: list):
+    """One record's value alone (as it was fitted), else the list; ``None`` for records
+    without inputs."""
+    if per_record[0] is None:
+        return None
+    return per_record[0] if len(per_record) == 1 else per_record
