@@ -136,20 +136,21 @@ class DissipationDiscrepancy(EnergyModel):
         k = x.shape[1] // 2
         return PreparedRecording(self._energy, x, t, self._terms(k), self.variable_names(k))
 
-    def fit_prepared(self, record: PreparedRecording, stop: int, *,
-                     check: bool = True) -> DissipationDiscrepancy:
+    def fit_prepared(self, record: PreparedRecording, stop: int, *, check: bool = True,
+                     constrain_to: int | None = None) -> DissipationDiscrepancy:
         """Fit on the samples ``[0, stop)`` of a prepared recording (whose library must hold
         this model's terms), e.g. one shared by the procedures of
         :func:`~discrepancy.energy.blind_fit`; ``check=False`` skips ``soundness_`` (the
-        constraints hold the law anyway; the check reports on it)."""
+        constraints hold the law anyway; the check reports on it). ``constrain_to``: the
+        torque bound, the turning points and the check come from ``[0, constrain_to)``
+        (default ``stop``), e.g. the whole recording when only its moving part is fitted."""
         self._validate_params()
         if not isinstance(record, PreparedRecording):
             raise ParameterError(f"record must be a PreparedRecording (from prepare); got "
                                  f"{type(record).__name__}")
-        if isinstance(stop, (bool, np.bool_)) or not isinstance(stop, (int, np.integer)) \
-                or not 3 <= stop <= len(record.t):
-            raise ParameterError(f"stop must be an integer in [3, {len(record.t)}] (samples of "
-                                 f"the recording); got {stop!r}")
+        _check_stop("stop", stop, 3, len(record.t))
+        bounds_stop = stop if constrain_to is None else constrain_to
+        _check_stop("constrain_to", bounds_stop, stop, len(record.t))
         k = record.x.shape[1] // 2
         terms = self._terms(k)
         columns = _columns(record.terms, terms)
@@ -157,8 +158,9 @@ class DissipationDiscrepancy(EnergyModel):
         self.variable_names_ = self.variable_names(k)
         self.fit_start_ = float(record.t[start])
         self.e0_ = float(record.h0 - record.delta_h[start])
-        self.torque_limit_ = record.torque_limit(stop, self.torque_limit)
-        limits = record.limits(stop, self.torque_limit, self.turning_points).restricted(columns)
+        self.torque_limit_ = record.torque_limit(bounds_stop, self.torque_limit)
+        limits = record.limits(bounds_stop, self.torque_limit,
+                               self.turning_points).restricted(columns)
         rows = slice(start, stop)       # integrals and dH restart where the fitted data begin
         block = self._block(record.t[rows])
         self.fit_ = fit_dissipation(
@@ -171,7 +173,7 @@ class DissipationDiscrepancy(EnergyModel):
             self.fit_.offset
         if check:
             chosen = [columns[terms.index(term)] for term in self.terms_]
-            self.soundness_ = {**record.check(stop, chosen, self.coef_),
+            self.soundness_ = {**record.check(bounds_stop, chosen, self.coef_),
                                "active_constraints": list(self.fit_.active)}
         return self
 
@@ -262,3 +264,10 @@ def _columns(library, terms) -> list[int]:
     if missing:
         raise ParameterError(f"the prepared recording lacks the terms {missing}")
     return [index[term] for term in terms]
+
+
+def _check_stop(name: str, stop, low: int, high: int) -> None:
+    if isinstance(stop, (bool, np.bool_)) or not isinstance(stop, (int, np.integer)) \
+            or not low <= stop <= high:
+        raise ParameterError(f"{name} must be an integer in [{low}, {high}] (samples of the "
+                             f"recording); got {stop!r}")
