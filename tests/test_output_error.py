@@ -194,3 +194,31 @@ def test_a_hidden_predator_with_a_numpy_prior_over_two_records_and_no_guess():
     assert model.complexity == 1
     assert coefficient(model, "pred", "prey pred") == pytest.approx(0.1, rel=0.02)
     np.testing.assert_allclose(model.x0_, [z[0] for z in runs], rtol=0.02)
+
+
+@pytest.mark.slow
+def test_a_support_that_diverges_once_refitted_on_all_the_data_gives_the_prior_alone():
+    """Van der Pol measured by position only, with a prior that lacks the restoring term
+    (it cannot oscillate): the path from the prior's start finds nothing good, and the
+    support it chooses on the training part, refitted on everything, diverges within a
+    hundredth of a second. The fit returns the prior alone, with its own best initial
+    state (the same fit as asking for the prior alone), and says why."""
+    t = np.arange(0, 20, 0.02)
+    x = solve_ivp(lambda s, z: [z[1], 0.5 * (1 - z[0] ** 2) * z[1] - z[0]], (0, 20), [1, 0],
+                  t_eval=t, rtol=1e-10, atol=1e-10).y.T
+    y = (x + 0.01 * np.random.default_rng(0).standard_normal(x.shape))[:, :1]
+
+    def prior(z, u=None):
+        return np.c_[z[:, 1], 0.1 * (1 - z[:, 0] ** 2) * z[:, 1]]
+
+    def model(**kw):
+        return dc.DiscrepancyModel(prior=prior, feature_library=dc.PolynomialLibrary(degree=3),
+                                   state_names=["x1", "x2"], **kw)
+
+    with pytest.warns(dc.errors.PriorOnlyWarning, match="refitted on all the data"):
+        fitted = model().fit_outputs(y, t=t, outputs=["x1"], progress=False)
+    alone = model(optimizer=dc.PriorOnly()).fit_outputs(y, t=t, outputs=["x1"])
+    assert fitted.prior_only_ and not fitted.coef_.any()
+    assert np.isfinite(fitted.output_error_)
+    assert fitted.output_error_ == pytest.approx(alone.output_error_, rel=1e-6)
+    np.testing.assert_allclose(fitted.x0_, alone.x0_, rtol=1e-5, atol=1e-8)

@@ -98,6 +98,8 @@ class ProcedureChoice:
         return "\n".join([*lines, f"the chosen model: {self.final_route}"])
 
 
+#: the name of the candidate that is the prior alone (always entered, first)
+PRIOR = "prior alone"
 #: ``holds=``: a list of input holds
 HOLD_LISTS = Predicate(lambda v: isinstance(v, (list, tuple)) and all(h in HOLDS for h in v),
                        "a list of them")
@@ -157,8 +159,6 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     pick = contest.pick()
     template, settings = contest.entries[pick]
     final, route = contest.judge(settings).final(template)
-    if not isinstance(x, (list, tuple)) and isinstance(getattr(final, "x0_", None), list):
-        final.x0_ = final.x0_[0]                 # one record given: one state, as fit gives
     return ProcedureChoice(pick, final, contest.scores, settings,
                            contest.fractions.tolist(), contest.judge(settings).horizon, route)
 
@@ -211,10 +211,11 @@ class _Contest:
         mean = np.where(finite, mean, np.inf)
         margin = np.maximum(np.nan_to_num(se, nan=0.0), TOLERANCE * mean[finite].min())
         # simplest first: fewest terms, then the default input hold, then the smaller
-        # library (a union that kept only one library's terms is that library)
+        # library (a union that kept only one library's terms is that library), then the
+        # prior alone itself (a candidate whose fits fell back to it is no other model)
         sizes = [(self.scores[k]["n_terms"],
                   self.entries[k][1].get("u_hold", DEFAULT_HOLD) != DEFAULT_HOLD,
-                  self.scores[k]["library_size"])
+                  self.scores[k]["library_size"], k != PRIOR)
                  for k in names]
         return names[one_standard_error(mean, margin, sizes)]
 
@@ -225,9 +226,9 @@ def _joined(templates, scores, names) -> dict:
     library holds the other. Name: their names' parts, each once (of the polynomials only
     the highest degree, ``linear`` left out beside one). ``names``: the variables the
     libraries are made of."""
-    prior = scores["prior alone"]["mean"]
+    prior = scores[PRIOR]["mean"]
     ranked = sorted((scores[k]["mean"], k) for k, m in templates.items()
-                    if k != "prior alone" and scores[k]["mean"] < prior
+                    if k != PRIOR and scores[k]["mean"] < prior
                     and isinstance(m.feature_library, FeatureLibrary))
     if len(ranked) < 2:
         return {}
@@ -267,7 +268,7 @@ def _templates(model, candidates, records, outputs, fit_kws) -> dict:
     if not isinstance(candidates, Mapping) or not candidates:
         raise ParameterError(f"candidates must be a non-empty mapping of names to libraries "
                              f"or unfitted DiscrepancyModels; got {describe(candidates)}")
-    out = {"prior alone": clone(model).set_params(optimizer="prior_only", selection="auto")}
+    out = {PRIOR: clone(model).set_params(optimizer="prior_only", selection="auto")}
     for name, c in candidates.items():
         if isinstance(c, (FeatureLibrary, str)):
             out[str(name)] = clone(model).set_params(feature_library=c)

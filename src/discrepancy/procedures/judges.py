@@ -40,8 +40,8 @@ class Judge:
     def fit(self, template, fraction):
         """A clone of ``template`` fitted on the first ``fraction`` of every record."""
         parts = [head(r, fraction) for r in self.records]
-        u = None if parts[0].u is None else [p.u for p in parts]
-        return self._fit(clone(template), [p.x for p in parts], [p.t for p in parts], u)
+        return self._fit(clone(template), *(as_given([getattr(p, k) for p in parts])
+                                            for k in ("x", "t", "u")))
 
 
 class StateForecasts(Judge):
@@ -91,3 +91,11 @@ def head(record, fraction):
     """The first ``fraction`` of ``record`` (all of it at ``fraction >= 1``)."""
     k = record.n_samples if fraction >= 1 else int(round(record.n_samples * fraction))
     return Trajectory(record.t[:k], record.x[:k], None if record.u is None else record.u[:k])
+
+
+def as_given(per_record: list):
+    """One record's value alone (as a user gives one record), else the list; ``None`` for
+    records without inputs."""
+    if per_record[0] is None:
+        return None
+    return per_record[0] if len(per_record) == 1 else per_record

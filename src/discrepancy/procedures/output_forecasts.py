@@ -27,7 +27,7 @@ from ..hybrid.inputs import DEFAULT_HOLD
 from ..hybrid.outputs import OutputMap
 from ..models.outputs.output_checks import simulate_quietly
 from ..models.outputs.output_fit import refit_outputs
-from .judges import WHOLE, Judge, head
+from .judges import WHOLE, Judge, as_given, head
 
 #: how :meth:`OutputForecasts.final` made the chosen model when not by :data:`.judges.WHOLE`
 SCORED = ("its scored support refined on all the data (the whole procedure's fit was worse "
@@ -71,7 +71,7 @@ class OutputForecasts(Judge):
         first = self.proposed.get(id(template))
         if first is None or first.prior_only_:
             return whole, WHOLE
-        y, t, u = (_as_given([getattr(r, k) for r in self.records]) for k in ("x", "t", "u"))
+        y, t, u = (as_given([getattr(r, k) for r in self.records]) for k in ("x", "t", "u"))
         kw = {k: v for k, v in self.fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -117,17 +117,9 @@ def _refitted(first, y, t, u, outputs, fit_kws):
     starting from its own."""
     kw = {"x0_bounds": None, "u_hold": DEFAULT_HOLD, "substeps": 4,
           **{k: v for k, v in fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}}
-    coef, x0s, _ = refit_outputs(first, _as_given(y), _as_given(t),
-                                 None if u is None else _as_given(u),
+    coef, x0s, _ = refit_outputs(first, as_given(y), as_given(t),
+                                 None if u is None else as_given(u),
                                  outputs=outputs, x0=first.x0_, coefficients=True, **kw)
     model = first.with_coefficients(coef * (first.coef_ != 0))
-    model.x0_ = _as_given(list(x0s))
+    model.x0_ = as_given(list(x0s))
     return model
-
-
-def _as_given(per_record: list):
-    """One record's value alone (as it was fitted), else the list; ``None`` for records
-    without inputs."""
-    if per_record[0] is None:
-        return None
-    return per_record[0] if len(per_record) == 1 else per_record

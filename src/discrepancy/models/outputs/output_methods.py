@@ -63,14 +63,15 @@ class OutputErrorMethods:
             return self._fit_prior_outputs(y, t, u, outputs=outputs, x0=x0,
                                            x0_bounds=x0_bounds, u_hold=u_hold,
                                            substeps=substeps)
-        setup, coef, x0s, fit, path, error = fit_outputs(
+        setup, coef, x0s, fit, path, error, worse = fit_outputs(
             self, y, t, u, outputs=outputs, x0=x0, x0_bounds=x0_bounds, u_hold=u_hold,
             substeps=substeps, max_terms=max_terms, holdout=holdout, tolerance=tolerance,
             progress=progress)
         self._set_fit(setup, coef, None, None)
         self._keep_outputs(y, x0s, fit, error)
         self.output_selection_ = path
-        self._after_output_fit(y, t, u, x0s, substeps, u_hold, chosen_by_path=bool(path))
+        self._after_output_fit(y, t, u, x0s, substeps, u_hold, chosen_by_path=bool(path),
+                               prior_because=worse)
         return self
 
     def refine(self, y, t=None, *args, u=None, outputs=None, x0=None, x0_bounds=None,
@@ -163,8 +164,10 @@ class OutputErrorMethods:
         self._after_output_fit(y, t, u, x0s, substeps, u_hold, chosen_by_path=False)
         return self
 
-    def _after_output_fit(self, y, t, u, x0s, substeps, u_hold, *, chosen_by_path):
-        """The region along the fitted simulation; a prior-only outcome flagged."""
+    def _after_output_fit(self, y, t, u, x0s, substeps, u_hold, *, chosen_by_path,
+                          prior_because=None):
+        """The region along the fitted simulation; a prior-only outcome flagged (with
+        ``prior_because`` when the chosen support was set aside after the path)."""
         import warnings
 
         from ...errors import PriorOnlyWarning
@@ -173,7 +176,9 @@ class OutputErrorMethods:
         self.forecast_selection_, self.region_ = None, None
         self.region_ = simulated_region(self, y, t, u, x0s=x0s, substeps=substeps,
                                         u_hold=u_hold)
-        if chosen_by_path and self.prior_only_:
+        if prior_because:
+            warnings.warn(prior_because, PriorOnlyWarning, stacklevel=3)
+        elif chosen_by_path and self.prior_only_:
             warnings.warn("no support forecast the held-out end of the records better than "
                           "the prior alone: the model is the prior alone (model.prior_only_ "
                           "is True; model.output_selection_ has every support's score)",
