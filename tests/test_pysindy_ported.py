@@ -271,6 +271,17 @@ def test_same_multiple_trajectories():
     same_coefficients(ps.SINDy().fit(XM, TM, x_dot=XM), ours().fit(XM, TM, x_dot=XM))
 
 
+
+def test_one_time_array_is_shared_by_every_trajectory_as_in_pysindy():
+    t = TM[1]
+    xs = [solve_ivp(lorenz, (t[0], t[-1]), x0, t_eval=t).y.T for x0 in ([1, 2, 3], [-4, 2, 20])]
+    peer, mine = ps.SINDy().fit(xs, t), ours().fit(xs, t)
+    same_coefficients(peer, mine)
+    np.testing.assert_array_equal(mine.coef_, ours().fit(xs, [t, t]).coef_)
+    with pytest.raises(errors.ShapeError, match=r"^t\[1\] must be a step or a 1-D array of 100"):
+        ours().fit([xs[0], xs[1][:100]], t)
+
+
 def test_same_discrete_time_fit_predict_score_simulate():
     peer = ps.DiscreteSINDy().fit(XD, t=1)
     mine = ours(discrete_time=True, differentiation_method=None).fit(XD)

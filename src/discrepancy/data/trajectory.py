@@ -77,7 +77,8 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
     Args:
         x: states, ``(m, n)`` array or list of such arrays (several trajectories,
             never differentiated across their joins). All must have the same ``n``.
-        t: time step (float > 0) or times ``(m,)``, or a list of those per trajectory.
+        t: time step (float > 0) or times ``(m,)``, or a list of those per trajectory
+            (one step or one array of times is shared by every trajectory, as in PySINDy).
             ``None`` means a unit step.
         u: inputs ``(m, r)`` (or ``(m,)`` for one input), a list per trajectory, or one
             number (a constant input in every trajectory, as PySINDy broadcasts it).
@@ -95,8 +96,8 @@ def as_trajectories(x, t=None, u=None, x_dot=None, sample_weight=None, *,
         raise ShapeError(f"{x_name} must hold at least one trajectory; got an empty list")
     k = len(xs)
     if several:
-        ts = one_per_trajectory("t", 1.0 if t is None else t, k,
-                      broadcast=not isinstance(t, (list, tuple)) and np.ndim(t) == 0)
+        ts = one_per_trajectory("t", 1.0 if t is None else t, k,   # one array: shared,
+                                broadcast=not isinstance(t, (list, tuple)))   # as in PySINDy
         us = one_per_trajectory("u", u, k, broadcast=u is None)
         xds = one_per_trajectory("x_dot", x_dot, k, broadcast=x_dot is None)
         ws = one_per_trajectory("sample_weight", sample_weight, k, broadcast=sample_weight is None)
