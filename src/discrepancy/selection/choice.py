@@ -172,7 +172,8 @@ class _Search:
         self.fits = cands.FoldFits(stats, constraints, alpha)
         n, p = setup.n_states, setup.n_features
         try:
-            self.paths = cands.equation_paths(optimizer, n, p)
+            self.paths = cands.equation_paths(optimizer, n, p, stats,
+                                              getattr(constraints, "allowed", None))
         except LookupError:   # an optimizer's own answer, not a path: it or the prior
             self.paths = None
         self.keys, self.supports, self.labels, self.rows, self.curves = [], [], [], [], []

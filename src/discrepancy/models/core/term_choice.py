@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 
-from ...errors import DataError, PriorOnlyWarning
+from ...errors import DataError, PriorOnlyWarning, SelectionWarning
 from ...selection.choice import select_by_forecasts
 
 SELECTIONS = ("auto", "forecast", "optimizer")
@@ -42,8 +42,14 @@ def choose_terms(model, setup, stats, optimizer):
 
 
 def announce(model, selection) -> None:
-    """Warn when forecasts chose the prior alone."""
-    if selection is None or not selection.prior_only:
+    """Warn when the model is the prior alone, chosen by forecasts; and when forecasts were
+    asked for but the data held too few windows to judge, so equation error's choice
+    stands unchecked against the prior alone."""
+    if selection is None:
+        if by_forecasts(model.selection, model.setup_.optimizer):
+            _unchecked(model)
+        return
+    if not selection.prior_only:
         return
     best = int(np.argmin(selection.score))
     margin = "" if selection.n_terms[best] == 0 else (
@@ -54,3 +60,22 @@ def announce(model, selection) -> None:
                   f"the training data{margin}: the model is the prior alone "
                   "(model.prior_only_ is True; model.forecast_selection_ has every "
                   "candidate's score)", PriorOnlyWarning, stacklevel=4)
+
+
+def _unchecked(model) -> None:
+    paths = getattr(model.optimizer_, "selection_", None) or [{}]
+    if paths[0].get("criterion") == "BIC":
+        return   # the short-record fallback to BIC has said so (ShortRecordWarning)
+    why = ("the training data hold too few forecast windows, or windows too short beside "
+           "the smoothing, to compare it with the prior alone")
+    terms = int(np.count_nonzero(model.coef_))
+    if terms:
+        warnings.warn(f"the equation-error choice ({terms} terms) stands unchecked: {why} "
+                      "(model.forecast_selection_ is None; a longer record lets forecasts "
+                      "judge; check the model's simulation against the prior's)",
+                      SelectionWarning, stacklevel=5)
+    else:
+        warnings.warn(f"equation error (the cross-validated threshold path) kept no term, "
+                      f"and {why}: the model is the prior alone (model.prior_only_ is True; "
+                      "model.optimizer_.selection_ has the path's scores; a longer record lets "
+                      "forecasts judge)", PriorOnlyWarning, stacklevel=5)
