@@ -228,23 +228,34 @@ def test_forward_selection_takes_the_term_that_explains_the_residual_alone():
     assert not any(s[3] for s in forward_supports(gram, rhs, masked))
 
 
-def test_a_choice_forecasts_could_not_judge_says_so(helpers):
+def pendulum(damping):
+    return lambda z, u=None: np.stack([z[..., 1], -np.sin(z[..., 0]) - damping * z[..., 1]],
+                                      axis=-1)
+
+
+def noisy_swing(helpers, damping, n, seed):
+    x = helpers.integrate(pendulum(damping), [2.5, 0.0], np.arange(n) * 0.01)
+    return x + NOISE * x.std(axis=0) * np.random.default_rng(seed).standard_normal(x.shape)
+
+
+def test_short_records_smoothed_by_long_windows_are_still_judged_by_forecasts(helpers):
     """A pendulum at 10x the paper's noise on 3001 samples: the smoothing window (309
-    samples) makes fold segments of 1024, so the record holds two forecast windows, too few
-    to judge. With the exact (damped) prior equation error keeps no term: the prior alone,
-    which says so. With the exact undamped prior it keeps three terms that nearly vanish on
-    the orbit (a conserved energy): the choice stands, but says it is unchecked."""
-    t = np.arange(3001) * 0.01
+    samples) makes fold segments of 1024 rows, whose starts gave two forecast windows, too
+    few to judge, so equation error's choice stood. With the exact undamped prior it kept
+    0.329 - 0.055 x1^2 - 0.103 x2^2 in x1' (nearly zero along the orbit: a conserved
+    energy); with the prior missing a damping of -0.1 x2 it kept nothing. Origins one
+    smoothing window apart give forecasts enough windows: the prior alone, and the damping."""
+    exact = fit(pendulum(0.0), noisy_swing(helpers, 0.0, 3001, 1))
+    assert exact.prior_only_ and exact.forecast_selection_.n_windows >= 4
+    weak = fit(pendulum(0.0), noisy_swing(helpers, 0.1, 3001, 9))
+    assert active(weak) == {("x2", "x2")}
+    assert weak.coef_[1, weak.get_feature_names().index("x2")] == pytest.approx(-0.1, rel=0.1)
 
-    def pendulum(damping):
-        return lambda z, u=None: np.stack([z[..., 1], -np.sin(z[..., 0]) - damping * z[..., 1]],
-                                          axis=-1)
 
-    for damping, warning, text in ((0.1, PriorOnlyWarning, "too few forecast windows"),
-                                   (0.0, dc.errors.SelectionWarning, "stands unchecked")):
-        x = helpers.integrate(pendulum(damping), [2.5, 0.0], t)
-        noisy = x + NOISE * x.std(axis=0) * np.random.default_rng(1).standard_normal(x.shape)
-        with pytest.warns(warning, match=text):
-            model = fit(pendulum(damping), noisy)
-        assert model.forecast_selection_ is None
-        assert model.prior_only_ == (damping > 0)
+def test_a_choice_forecasts_cannot_judge_says_so(helpers):
+    """1201 samples smoothed by a 301-sample window: three origins, too few. Equation error
+    keeps no term for the exact prior: the prior alone, which says so."""
+    with pytest.warns(PriorOnlyWarning, match="too few forecast windows"):
+        model = fit(pendulum(0.1), noisy_swing(helpers, 0.1, 1201, 1),
+                    differentiation_method=dc.SavitzkyGolay(window_length=301, polyorder=3))
+    assert model.prior_only_ and model.forecast_selection_ is None

@@ -28,6 +28,8 @@ MAX_LEAD = 1024
 MAX_WINDOWS = 32
 #: samples before an origin kept for smoothing it when the method has no finite halo
 GLOBAL_PRE = 32
+#: fewest windows a choice by forecasts needs (:mod:`discrepancy.selection.choice`)
+MIN_WINDOWS = 4
 
 
 @dataclass(eq=False)
@@ -85,6 +87,7 @@ class HeldOutWindows:
             ``(i // segment) % n_folds``).
         pre: samples kept before each origin (the smoothing's halo).
         max_lead: samples kept after each origin.
+        spacing: rows between origins (default ``segment``: each segment's first row).
 
     Feed each trajectory as :meth:`begin` (its first data row), :meth:`add` (consecutive
     samples, any number of calls) and :meth:`end`.
@@ -95,6 +98,7 @@ class HeldOutWindows:
     pre: int
     max_lead: int = MAX_LEAD
     max_windows: int = MAX_WINDOWS
+    spacing: int | None = None
     windows: list = field(default_factory=list)
     low: np.ndarray | None = None
     high: np.ndarray | None = None
@@ -109,11 +113,12 @@ class HeldOutWindows:
 
     def origins(self, n_samples: int, first_sample: int = 0) -> list[int]:
         """Samples (of the current trajectory) among ``first_sample ...`` + ``n_samples``
-        that start a segment and have ``pre`` samples before them (the smoothing of a
-        trajectory's first samples is an extrapolation)."""
-        first = self._row + first_sample
-        start = -(-first // self.segment) * self.segment
-        return [r - self._row for r in range(start, first + n_samples, self.segment)
+        at a multiple of ``spacing`` rows (a segment's start by default) with ``pre``
+        samples before them (the smoothing of a trajectory's first samples is an
+        extrapolation)."""
+        first, step = self._row + first_sample, self.spacing or self.segment
+        start = -(-first // step) * step
+        return [r - self._row for r in range(start, first + n_samples, step)
                 if r - self._row >= self.pre]
 
     def register(self, sample: int) -> Window:
@@ -197,9 +202,9 @@ class HeldOutWindows:
 
     def empty_like(self) -> HeldOutWindows:
         """A new collector with the same settings (segment, folds, samples before an origin,
-        longest lead, most windows) and no windows or extremes yet."""
+        longest lead, most windows, spacing) and no windows or extremes yet."""
         return HeldOutWindows(self.segment, self.n_folds, self.pre, self.max_lead,
-                              self.max_windows)
+                              self.max_windows, self.spacing)
 
     def complete(self) -> list[Window]:
         """The kept windows with at least one sample after the origin, trimmed."""

@@ -24,7 +24,7 @@ from ..optimizers.resampling import Rows
 from ..resources import SMALLER_LIBRARY, check_memory, n_bytes
 from ..symbolic import IDENTIFIER
 from .accumulate import BLOCK_ROWS, Names, accumulate, statistics_bytes
-from .held_out import HeldOutWindows
+from .held_out import MIN_WINDOWS, HeldOutWindows
 from .prior import Prior
 from .rows import RowForm, row_form
 
@@ -120,10 +120,31 @@ class FitSetup:
         about one window) and of ``MIN_SEGMENT`` (512) or, for short data (``probe_rows``,
         the rows of the first ``FOLD_PROBE_ROWS`` seen), of a tenth of them; at most one
         accumulation block."""
-        halo = self.differentiation.halo or 0
-        short = max(16, 1 << (max(1, self.probe_rows // (2 * N_FOLDS)).bit_length() - 1))
-        need = max(min(MIN_SEGMENT, short), 2 * (2 * halo + 1))
+        need = max(self._short_segment, 2 * (2 * self._halo + 1))
         return min(BLOCK_ROWS, 1 << (need - 1).bit_length())
+
+    @property
+    def origin_spacing(self) -> int:
+        """Rows between forecast origins: a segment's, unless the data are known to be short
+        (fewer than ``FOLD_PROBE_ROWS`` rows) and the smoothing window stretched the
+        segments so far that they hold fewer than ``MIN_WINDOWS`` origins; then one
+        smoothing window (at least the short data's segment), so forecasts can still judge
+        (a pendulum of 3001 samples smoothed by 309 has segments of 1024: two origins).
+        Windows from such origins also run into the next segment, as long windows do."""
+        segment = self.fold_segment
+        if self.probe_rows >= FOLD_PROBE_ROWS or (self.probe_rows - 1) // segment >= \
+                MIN_WINDOWS:
+            return segment
+        return max(self._short_segment, 2 * self._halo + 1)
+
+    @property
+    def _halo(self) -> int:
+        return self.differentiation.halo or 0
+
+    @property
+    def _short_segment(self) -> int:
+        short = max(16, 1 << (max(1, self.probe_rows // (2 * N_FOLDS)).bit_length() - 1))
+        return min(MIN_SEGMENT, short)
 
     def new_statistics(self) -> GramStatistics:
         """Empty statistics of the right size (``p`` features, ``n`` targets), kept per
@@ -140,7 +161,8 @@ class FitSetup:
         """Empty forecast windows for these statistics' folds (see
         :mod:`discrepancy.fitting.held_out`); ``pre``: the smoothing's halo (none for maps
         and the weak form, whose origins are raw samples)."""
-        return HeldOutWindows(self.fold_segment, N_FOLDS, self.form.pre)
+        return HeldOutWindows(self.fold_segment, N_FOLDS, self.form.pre,
+                              spacing=self.origin_spacing)
 
     @cached_property
     def names(self):

@@ -23,13 +23,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..fitting.held_out import MIN_WINDOWS
 from ..optimizers.selection import one_standard_error
 from . import candidates as cands
 from .forecast import CAP, forecast_scores, prepare, refine_origins
 from .horizon import choose_steps, sensitive_leads
 
-#: fewest windows a choice by forecasts needs (fewer: the equation-error choice is kept)
-MIN_WINDOWS = 4
 #: rounds of the coordinate search over candidates
 MAX_ROUNDS = 3
 #: scores within this fraction of the best are ties whatever their standard error (a mean
