@@ -230,7 +230,7 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
                              f"{n_origins!r}")
     if dq is not None:
         dq = as_2d("dq", dq, n_rows=len(q), n_cols=q.shape[1], allow_1d=True)[:split]
-    validation = float(t[-1] - t[split])
+    validation, until_split = float(t[-1] - t[split]), float(t[split] - t[0])
     q, t = q[:split], t[:split]
     smoothing, base = None, candidates
     if isinstance(candidates, DissipationDiscrepancy) and \
@@ -244,8 +244,9 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
     moving = _moving_part(base if isinstance(base, DissipationDiscrepancy)
                           else next(iter(base.values())), q, t, dq)
     training = float(t[moving - 1] - t[0])
-    if isinstance(base, DissipationDiscrepancy):
-        candidates = default_procedures(base, training, q.shape[1])
+    if isinstance(base, DissipationDiscrepancy):   # windows and blocks: shares of training
+        candidates = default_procedures(base, until_split if moving == len(t) else training,
+                                        q.shape[1])
     if horizon is None:
         horizon = min(validation, training / 3)
     else:
