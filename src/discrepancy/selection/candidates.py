@@ -19,6 +19,7 @@ import numpy as np
 
 from ..optimizers.base import refit_on_support
 from ..optimizers.linear_constraints import constrained_solve
+from ..optimizers.selection import cross_validated_errors
 
 #: supports per equation offered to forecasts at most (the empty one included)
 MAX_PER_EQUATION = 8
@@ -26,16 +27,15 @@ MAX_PER_EQUATION = 8
 FORWARD_TERMS = 2
 
 
-def equation_paths(optimizer, n: int, p: int, stats=None,
-                   allowed=None) -> list[list[np.ndarray]]:
+def equation_paths(optimizer, n: int, p: int, stats=None, allowed=None,
+                   alpha: float = 0.0) -> list[list[np.ndarray]]:
     """Per equation, the supports ``(p,)`` offered to forecasts: the optimizer's threshold
     path from its cross-validated minimum (the densest worth trying) to the empty support,
     sparser last, at most :data:`MAX_PER_EQUATION` (those nearest the equation-error
-    choice, and the empty one); with ``stats``, also the first :data:`FORWARD_TERMS`
-    supports of forward selection (:func:`forward_supports`) that the path lacks, before
-    the empty one, where some support cross-validates better than none (where none does,
-    more candidates only offer more noise to fit). Raises LookupError when the optimizer
-    kept no scored path."""
+    choice, and the empty one); with ``stats`` (with folds), also the supports of forward
+    selection (:func:`forward_supports`) that the path lacks and that cross-validate
+    better than no term, before the empty one (one that does not only offers forecasts more
+    noise to fit). Raises LookupError when the optimizer kept no scored path."""
     paths = getattr(optimizer, "selection_", None)
     if not paths or any("supports" not in path for path in paths) or \
             paths[0].get("criterion") == "BIC":
@@ -49,12 +49,22 @@ def equation_paths(optimizer, n: int, p: int, stats=None,
         supports = [np.asarray(path["supports"][j], bool) for j in keep]
         if not supports[-1].any():
             supports.pop()
-        if stats is not None and np.any(path["supports"][best]):
-            mask = np.ones(p, bool) if allowed is None else np.asarray(allowed[len(out)], bool)
-            supports += [f for f in forward_supports(stats.gram, stats.rhs[:, len(out)], mask)
-                         if not any(np.array_equal(f, s) for s in supports)]
+        if stats is not None and stats.folds:
+            supports += _forward_worth_trying(stats, len(out), supports, allowed, alpha)
         out.append([*supports, np.zeros(p, bool)])
     return out
+
+
+def _forward_worth_trying(stats, i, path, allowed, alpha) -> list[np.ndarray]:
+    """Forward selection's supports of equation ``i`` not on ``path`` whose blocked
+    cross-validation error is below the empty support's."""
+    mask = np.ones(stats.p, bool) if allowed is None else np.asarray(allowed[i], bool)
+    def error(support):
+        return float(np.mean(cross_validated_errors(stats, i, support, alpha)))
+
+    empty = error(np.zeros(stats.p, bool))
+    return [f for f in forward_supports(stats.gram, stats.rhs[:, i], mask)
+            if not any(np.array_equal(f, s) for s in path) and error(f) < empty]
 
 
 def forward_supports(gram: np.ndarray, rhs: np.ndarray, allowed: np.ndarray

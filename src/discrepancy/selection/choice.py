@@ -172,7 +172,7 @@ class _Search:
         n, p = setup.n_states, setup.n_features
         try:
             self.paths = cands.equation_paths(optimizer, n, p, stats,
-                                              getattr(constraints, "allowed", None))
+                                              getattr(constraints, "allowed", None), alpha)
         except LookupError:   # an optimizer's own answer, not a path: it or the prior
             self.paths = None
         self.keys, self.supports, self.labels, self.rows, self.curves = [], [], [], [], []
