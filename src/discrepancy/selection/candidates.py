@@ -25,6 +25,11 @@ from ..optimizers.selection import cross_validated_errors
 MAX_PER_EQUATION = 8
 #: terms of the largest support added by forward selection (:func:`forward_supports`)
 FORWARD_TERMS = 2
+#: standard errors (over folds) by which a forward step must lower the blocked
+#: cross-validation error to be offered
+CV_MARGIN = 2.0
+#: ... and by at least this fraction of its error
+CV_GAIN = 0.01
 
 
 def equation_paths(optimizer, n: int, p: int, stats=None, allowed=None,
@@ -33,9 +38,10 @@ def equation_paths(optimizer, n: int, p: int, stats=None, allowed=None,
     path from its cross-validated minimum (the densest worth trying) to the empty support,
     sparser last, at most :data:`MAX_PER_EQUATION` (those nearest the equation-error
     choice, and the empty one); with ``stats`` (with folds), also the supports of forward
-    selection (:func:`forward_supports`) that the path lacks and that cross-validate
-    better than no term, before the empty one (one that does not only offers forecasts more
-    noise to fit). Raises LookupError when the optimizer kept no scored path."""
+    selection (:func:`forward_supports`) that the path lacks, as far as each step
+    cross-validates clearly better, before the empty one (a step that does not only offers
+    forecasts more noise to fit). Raises LookupError when the optimizer kept no scored
+    path."""
     paths = getattr(optimizer, "selection_", None)
     if not paths or any("supports" not in path for path in paths) or \
             paths[0].get("criterion") == "BIC":
@@ -56,15 +62,25 @@ def equation_paths(optimizer, n: int, p: int, stats=None, allowed=None,
 
 
 def _forward_worth_trying(stats, i, path, allowed, alpha) -> list[np.ndarray]:
-    """Forward selection's supports of equation ``i`` not on ``path`` whose blocked
-    cross-validation error is below the empty support's."""
+    """Forward selection's supports of equation ``i`` not on ``path``, as far as each
+    cross-validates clearly better than the one before it (no term, for the first):
+    its error lower on the same folds by more than :data:`CV_MARGIN` standard errors of
+    the differences and by :data:`CV_GAIN` of the error. On Lorenz at 20 % noise, spurious
+    single terms beat no term by 0.1-1.5 standard errors and 0.01-0.5 %, and a second term
+    beside the true one by 0.01 %; a true damping on a forced Duffing oscillator at 10 %
+    noise by 2.9-20 standard errors and 3.5-12 %."""
     mask = np.ones(stats.p, bool) if allowed is None else np.asarray(allowed[i], bool)
-    def error(support):
-        return float(np.mean(cross_validated_errors(stats, i, support, alpha)))
-
-    empty = error(np.zeros(stats.p, bool))
-    return [f for f in forward_supports(stats.gram, stats.rhs[:, i], mask)
-            if not any(np.array_equal(f, s) for s in path) and error(f) < empty]
+    before, out = cross_validated_errors(stats, i, np.zeros(stats.p, bool), alpha), []
+    for support in forward_supports(stats.gram, stats.rhs[:, i], mask):
+        errors = cross_validated_errors(stats, i, support, alpha)
+        gain = before - errors
+        if len(gain) < 2 or gain.mean() <= max(CV_MARGIN * gain.std(ddof=1) / np.sqrt(
+                len(gain)), CV_GAIN * before.mean()):
+            break
+        if not any(np.array_equal(support, s) for s in path):
+            out.append(support)
+        before = errors
+    return out
 
 
 def forward_supports(gram: np.ndarray, rhs: np.ndarray, allowed: np.ndarray
