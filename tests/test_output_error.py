@@ -111,6 +111,26 @@ def test_refine_from_a_model_whose_simulation_diverges_says_so(oscillator):
         diverging.refine(y, t=t, u=u, outputs=["pos"])
 
 
+def test_a_refit_that_goes_non_finite_says_so(oscillator, monkeypatch):
+    """A refit whose solver ends with non-finite coefficients (on a positioning axis with
+    friction, choose_procedure's refit of a friction candidate did) raises
+    ConvergenceError, which the procedure choice catches, not a ShapeError from the copy."""
+    from discrepancy.models.outputs.output_error import OutputErrorFit
+
+    t, u, x, y = oscillator
+    model = oscillator_model(optimizer=dc.STLSQ(threshold=0.0)).fit(
+        x, t=t, u=u, x_dot=np.gradient(x, t, axis=0))
+    solve = OutputErrorFit.solve
+
+    def diverging(self, *args, **kw):
+        coef, x0s, cost = solve(self, *args, **kw)
+        return np.full_like(coef, np.nan), x0s, cost
+
+    monkeypatch.setattr(OutputErrorFit, "solve", diverging)
+    with pytest.raises(ConvergenceError, match="refit diverged"):
+        model.refine(y, t=t, u=u, outputs=["pos"])
+
+
 def test_bad_output_error_inputs_are_named(oscillator):
     t, u, x, y = oscillator
     with pytest.raises(ShapeError, match="y has 2 columns but outputs names 1"):

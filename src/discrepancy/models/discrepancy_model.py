@@ -510,9 +510,11 @@ class DiscrepancyModel(PredictionErrorMethods, OutputErrorMethods, PySINDyInterf
         bootstrap resample); shares the set-up."""
         self.check_is_fitted()
         coef = as_float_array("coef", coef)
-        if coef.shape != self.coef_.shape or not np.all(np.isfinite(coef)):
-            raise ShapeError(f"coef must be finite with shape {self.coef_.shape}; got "
-                             f"{coef.shape}")
+        if coef.shape != self.coef_.shape:
+            raise ShapeError(f"coef must have shape {self.coef_.shape}; got {coef.shape}")
+        if not np.all(np.isfinite(coef)):
+            raise DataError(f"coef must be finite; got {np.sum(~np.isfinite(coef))} "
+                            "non-finite entries")
         other = copy.copy(self)
         other._set_fit(self.setup_, coef, self.optimizer_, None)
         other.differentiation_choice_ = self.differentiation_choice_

@@ -37,6 +37,7 @@ origin (:mod:`.output_forecasts`).
 """
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -46,7 +47,7 @@ from tqdm.auto import tqdm
 from ..base import clone
 from ..constraints import Integral, Interval, Options, Predicate, check_argument
 from ..data.trajectory import as_trajectories
-from ..errors import ConvergenceError, ParameterError, describe
+from ..errors import ConvergenceError, ParameterError, PriorOnlyWarning, describe
 from ..fitting.setup import resolve_names
 from ..hybrid.inputs import DEFAULT_HOLD, HOLDS
 from ..hybrid.outputs import OutputMap
@@ -159,6 +160,11 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
     pick = contest.pick()
     template, settings = contest.entries[pick]
     final, route = contest.judge(settings).final(template)
+    if pick == PRIOR:
+        warnings.warn("no candidate forecast better than the prior alone inside the data "
+                      "given: the model is the prior alone (choice.model.prior_only_ is True; "
+                      "choice.table() has every candidate's score)", PriorOnlyWarning,
+                      stacklevel=2)
     return ProcedureChoice(pick, final, contest.scores, settings,
                            contest.fractions.tolist(), contest.judge(settings).horizon, route)
 

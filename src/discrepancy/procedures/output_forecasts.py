@@ -106,8 +106,10 @@ class OutputForecasts(Judge):
                                         self.fit_kws.get("u_hold", DEFAULT_HOLD)))
             except ConvergenceError:
                 return float("inf")
-            squares.append((((sim - rec.x) / self.scale)[cut:]) ** 2)
-        value = float(np.mean(np.vstack(squares)))
+            with np.errstate(over="ignore", invalid="ignore"):   # a diverging forecast
+                squares.append((((sim - rec.x) / self.scale)[cut:]) ** 2)
+        with np.errstate(over="ignore", invalid="ignore"):
+            value = float(np.mean(np.vstack(squares)))
         return value if np.isfinite(value) else float("inf")
 
 

@@ -259,6 +259,10 @@ def refit_outputs(model, y, t, u, *, outputs, x0, x0_bounds, u_hold, substeps, c
             f"{diverged[0]} of these data, and output error cannot start from a simulation "
             "that is not finite: start from a model (or x0=) whose simulation stays finite")
     coef, x0s, _ = fit.solve(support, model.coef_, x0s, everything, 0.0)
+    if not np.all(np.isfinite(coef)) or not np.all(np.isfinite(x0s)):
+        raise ConvergenceError("the output-error refit diverged on these data (its "
+                               "coefficients or initial states are not finite): start from "
+                               "a model (or x0=) closer to them")
     if coefficients:
         fit.covariance = fit.coefficient_covariance(support, coef, x0s, everything)
     return coef, x0s, fit
