@@ -492,7 +492,8 @@ def test_statistics_of_trajectories_summed_equal_the_fit_of_their_list(vdp_data,
     model = dc.DiscrepancyModel(prior=helpers.vdp_rhs(0.1), feature_library=dc.PolynomialLibrary(3),
                                 differentiation_method=dc.SavitzkyGolay(21))
     whole = clone(model).fit(parts, t=vdp_data.dt)
-    setup = model.make_setup(2, 0)
+    # the same sample as the fit: its size sets the cross-validation segments
+    setup = model.make_setup(2, 0, sample=as_trajectories(parts, vdp_data.dt))
     stats, summed = setup.new_statistics(), setup.new_statistics()
     for tr in as_trajectories(parts, vdp_data.dt):
         setup.statistics(tr, into=stats)     # rows numbered on, as a list's fit numbers them

@@ -85,6 +85,13 @@ def cross_validated_errors(stats, i: int, support: np.ndarray, alpha: float) -> 
     return errors
 
 
+def floored_cv_errors(stats, i: int, support: np.ndarray, alpha: float) -> np.ndarray:
+    """:func:`cross_validated_errors`, each floored at :data:`FLOOR` times the mean square
+    of the derivatives (or of the targets, if larger): below it they are numerical."""
+    floor = FLOOR * max(stats.signal[i], stats.yy[i]) / stats.count
+    return np.maximum(cross_validated_errors(stats, i, support, alpha), floor)
+
+
 def cross_validates(stats) -> bool:
     """Whether the statistics hold the two folds cross-validation needs; statistics with
     folds but too few samples for two fall back to BIC with a ShortRecordWarning
@@ -147,9 +154,7 @@ def select_thresholds(stlsq, stats, constraints=None) -> tuple[np.ndarray, np.nd
             1, p, constraints.allowed[i:i + 1].copy())
         path = threshold_path(stlsq, stats.gram, stats.rhs[:, i], mask)
         if use_cv:
-            floor = FLOOR * max(stats.signal[i], stats.yy[i]) / stats.count
-            scores = [np.maximum(cross_validated_errors(stats, i, s, alpha), floor)
-                      for _, s in path]
+            scores = [floored_cv_errors(stats, i, s, alpha) for _, s in path]
             error = np.array([e.mean() for e in scores])
             se = np.array([e.std(ddof=1) / np.sqrt(len(e)) for e in scores])
             pick = one_standard_error(error, se, [int(s.sum()) for _, s in path])

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..optimizers.base import refit_on_support
 from ..optimizers.linear_constraints import constrained_solve
-from ..optimizers.selection import cross_validated_errors
+from ..optimizers.selection import floored_cv_errors
 
 #: supports per equation offered to forecasts at most (the empty one included)
 MAX_PER_EQUATION = 8
@@ -70,9 +70,9 @@ def _forward_worth_trying(stats, i, path, allowed, alpha) -> list[np.ndarray]:
     beside the true one by 0.01 %; a true damping on a forced Duffing oscillator at 10 %
     noise by 2.9-20 standard errors and 3.5-12 %."""
     mask = np.ones(stats.p, bool) if allowed is None else np.asarray(allowed[i], bool)
-    before, out = cross_validated_errors(stats, i, np.zeros(stats.p, bool), alpha), []
+    before, out = floored_cv_errors(stats, i, np.zeros(stats.p, bool), alpha), []
     for support in forward_supports(stats.gram, stats.rhs[:, i], mask):
-        errors = cross_validated_errors(stats, i, support, alpha)
+        errors = floored_cv_errors(stats, i, support, alpha)
         gain = before - errors
         if len(gain) < 2 or gain.mean() <= max(CV_MARGIN * gain.std(ddof=1) / np.sqrt(
                 len(gain)), CV_GAIN * before.mean()):
