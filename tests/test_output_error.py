@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
+from scipy.signal import savgol_filter
 
 import discrepancy as dc
 from discrepancy.errors import ConvergenceError, DataError, ShapeError, UnknownNameError
@@ -242,3 +243,10 @@ def test_a_support_that_diverges_once_refitted_on_all_the_data_gives_the_prior_a
     assert np.isfinite(fitted.output_error_)
     assert fitted.output_error_ == pytest.approx(alone.output_error_, rel=1e-6)
     np.testing.assert_allclose(fitted.x0_, alone.x0_, rtol=1e-5, atol=1e-8)
+    # the route the warning names: velocities differentiated from the positions, a fit on
+    # them, then refine by output error, finds the missing restoring term and alpha
+    velocity = savgol_filter(y[:, 0], 31, 3, deriv=1, delta=0.02)
+    route = model().fit(np.c_[y[:, 0], velocity], t=t).refine(y, t=t, outputs=["x1"])
+    names = route.get_feature_names()
+    assert route.coef_[1, names.index("x1")] == pytest.approx(-1.0, rel=0.02)
+    assert route.coef_[1, names.index("x2")] == pytest.approx(0.4, rel=0.02)

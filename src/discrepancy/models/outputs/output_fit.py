@@ -120,8 +120,9 @@ def _worse_than_prior(fit, coef, x0s, prior_x0s, rows) -> str | None:
         f"fits them worse than the prior alone (output error {error:.4g} against {prior:.4g})"
     return (f"the chosen support of {np.count_nonzero(coef)} terms, refitted on all the "
             f"data, {how}: the model is the prior alone (model.prior_only_ is True; "
-            "model.output_selection_ has every support's score; a guess x0= or a better "
-            "prior may let output error find the correction)")
+            "model.output_selection_ has every support's score; a model fitted first on "
+            "estimated states, e.g. velocities differentiated from measured positions, "
+            "then refined by output error (refine), may find the correction)")
 
 
 def _prior_start(fit, x0s, rows, *, guessed: bool):
