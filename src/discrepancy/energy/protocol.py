@@ -232,19 +232,19 @@ def blind_fit(candidates, q, t, *, split: int, dq=None, horizon: float | None = 
         dq = as_2d("dq", dq, n_rows=len(q), n_cols=q.shape[1], allow_1d=True)[:split]
     validation, until_split = float(t[-1] - t[split]), float(t[split] - t[0])
     q, t = q[:split], t[:split]
-    smoothing, base = None, candidates
-    if isinstance(candidates, DissipationDiscrepancy) and \
-            candidates.differentiation_method is None:
-        base, smoothing = _with_smoothing(candidates, q, t)
-    elif not isinstance(candidates, DissipationDiscrepancy) and (
-            not isinstance(candidates, Mapping) or not candidates or not all(
-                isinstance(c, DissipationDiscrepancy) for c in candidates.values())):
+    smoothing, base = None, None     # base: the model whose default procedures compete
+    if isinstance(candidates, DissipationDiscrepancy):
+        base = candidates
+        if base.differentiation_method is None:
+            base, smoothing = _with_smoothing(base, q, t)
+    elif not isinstance(candidates, Mapping) or not candidates or not all(
+            isinstance(c, DissipationDiscrepancy) for c in candidates.values()):
         raise ParameterError("candidates must be a non-empty mapping of names to "
                              f"DissipationDiscrepancy; got {candidates!r:.80}")
-    moving = _moving_part(base if isinstance(base, DissipationDiscrepancy)
-                          else next(iter(base.values())), q, t, dq)
+    moving = _moving_part(base if base is not None else next(iter(candidates.values())), q,
+                          t, dq)
     training = float(t[moving - 1] - t[0])
-    if isinstance(base, DissipationDiscrepancy):   # windows and blocks: shares of training
+    if base is not None:             # windows and blocks: shares of the training part
         candidates = default_procedures(base, until_split if moving == len(t) else training,
                                         q.shape[1])
     if horizon is None:
@@ -298,7 +298,9 @@ def _moving_part(model: DissipationDiscrepancy, q, t, dq) -> int:
     it moves on to the end): forecasts from where it rests score noise relative to a range
     of noise, and a fit on the last share of a record at rest fits no loss at all (on a
     pendulum held by friction from 8.6 s of 20 s, every procedure scored 120-50,000 % and
-    the chosen law was 5 times too small)."""
+    the chosen law was 5 times too small). The states are smoothed again when the
+    candidates' recordings are prepared (one smoothing pass; the candidates' windows
+    depend on this answer)."""
     model._validate_params()
     x, times = model.states(q, t, dq=dq)
     h = model._energy(x)

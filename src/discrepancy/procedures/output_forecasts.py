@@ -55,10 +55,9 @@ class OutputForecasts(Judge):
         if first is None or first.prior_only_ or fraction >= 1:
             return super().fit(template, fraction)
         parts = [head(r, fraction) for r in self.records]
-        u = None if parts[0].u is None else [p.u for p in parts]
         try:
-            return _refitted(first, [p.x for p in parts], [p.t for p in parts], u,
-                             self.outputs, self.fit_kws)
+            return _refitted(first, *(as_given([getattr(p, k) for p in parts])
+                                      for k in ("x", "t", "u")), self.outputs, self.fit_kws)
         except ConvergenceError:   # its first model diverges on these data: start afresh
             return super().fit(template, fraction)
 
@@ -72,12 +71,11 @@ class OutputForecasts(Judge):
         if first is None or first.prior_only_:
             return whole, WHOLE
         y, t, u = (as_given([getattr(r, k) for r in self.records]) for k in ("x", "t", "u"))
-        kw = {k: v for k, v in self.fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
                 scored = copy.deepcopy(first).refine(y, t, u=u, outputs=self.outputs,
-                                                     x0=first.x0_, **kw)
+                                                     x0=first.x0_, **_refit_options(self.fit_kws))
             except ConvergenceError:
                 return whole, WHOLE
         fewer = np.count_nonzero(scored.coef_) <= np.count_nonzero(whole.coef_)
@@ -98,7 +96,7 @@ class OutputForecasts(Judge):
         self.proposed.setdefault(id(template), model)
         out_map = OutputMap(self.outputs, model.state_names_)
         x0s = model.x0_ if isinstance(model.x0_, list) else [model.x0_]
-        squares = []
+        scaled = []
         for x0, rec in zip(x0s, self.records, strict=True):
             cut = int(round(rec.n_samples * fraction))
             try:
@@ -106,10 +104,9 @@ class OutputForecasts(Judge):
                                         self.fit_kws.get("u_hold", DEFAULT_HOLD)))
             except ConvergenceError:
                 return float("inf")
-            with np.errstate(over="ignore", invalid="ignore"):   # a diverging forecast
-                squares.append((((sim - rec.x) / self.scale)[cut:]) ** 2)
-        with np.errstate(over="ignore", invalid="ignore"):
-            value = float(np.mean(np.vstack(squares)))
+            scaled.append(((sim - rec.x) / self.scale)[cut:])
+        with np.errstate(over="ignore", invalid="ignore"):   # a forecast that diverged
+            value = float(np.mean(np.vstack(scaled) ** 2))
         return value if np.isfinite(value) else float("inf")
 
 
@@ -117,11 +114,15 @@ def _refitted(first, y, t, u, outputs, fit_kws):
     """A copy of ``first`` (a model fitted by output error) with its support's
     coefficients and the initial states refitted on ``y`` by one output-error solve,
     starting from its own."""
-    kw = {"x0_bounds": None, "u_hold": DEFAULT_HOLD, "substeps": 4,
-          **{k: v for k, v in fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}}
-    coef, x0s, _ = refit_outputs(first, as_given(y), as_given(t),
-                                 None if u is None else as_given(u),
-                                 outputs=outputs, x0=first.x0_, coefficients=True, **kw)
+    kw = {"x0_bounds": None, "u_hold": DEFAULT_HOLD, "substeps": 4, **_refit_options(fit_kws)}
+    coef, x0s, _ = refit_outputs(first, y, t, u, outputs=outputs, x0=first.x0_,
+                                 coefficients=True, **kw)
     model = first.with_coefficients(coef * (first.coef_ != 0))
     model.x0_ = as_given(list(x0s))
     return model
+
+
+def _refit_options(fit_kws: dict) -> dict:
+    """The fit settings a refit of the same support takes (initial-state bounds, input
+    hold, RK4 substeps)."""
+    return {k: v for k, v in fit_kws.items() if k in ("x0_bounds", "u_hold", "substeps")}
