@@ -212,7 +212,8 @@ def test_output_forecasts_survive_a_candidate_whose_first_fit_diverges_later():
         warnings.simplefilter("error", RuntimeWarning)   # no invalid arithmetic on inf
         choice = dc.choose_procedure(model, y[:, None], t=0.02, u=force[:, None],
                                      outputs=["q"], candidates={"cubic": dc.PolynomialLibrary(3)},
-                                     join=False, holds=["linear"], progress=False)
+                                     join=False, holds=["linear"], n_origins=3, progress=False)
+    # three origins: where the refit diverged (with five, one lands where it does not)
     np.testing.assert_allclose(choice.scores["cubic"]["forecast_errors"],
                                choice.scores["prior alone"]["forecast_errors"], rtol=1e-9)
     assert choice.chosen == "prior alone" and choice.model.prior_only_

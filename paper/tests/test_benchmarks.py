@@ -14,7 +14,7 @@ pytest.importorskip("casadi")
 @pytest.mark.slow
 def test_cascaded_tanks_beats_the_bar_with_few_terms(tmp_path):
     """The quick run (the blind procedure scores the linear candidate and the prior alone
-    from two origins; every default one, from three, runs in `discrepancy reproduce
+    from two origins; every default one, from five, runs in `discrepancy reproduce
     cascaded-tanks`)."""
     folder = get_experiment("cascaded-tanks")(tmp_path, quick=True)
     results = json.loads((folder / "results.json").read_text())

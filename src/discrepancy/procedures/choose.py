@@ -99,6 +99,9 @@ class ProcedureChoice:
         return "\n".join([*lines, f"the chosen model: {self.final_route}"])
 
 
+#: forecast origins by default, as the energy blind fit's: the one-standard-error rule needs
+#: a standard error, and three origins give it from two degrees of freedom
+N_ORIGINS = 5
 #: the name of the candidate that is the prior alone (always entered, first)
 PRIOR = "prior alone"
 #: ``holds=``: a list of input holds
@@ -107,7 +110,7 @@ HOLD_LISTS = Predicate(lambda v: isinstance(v, (list, tuple)) and all(h in HOLDS
 
 
 def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
-                     n_origins: int = 3, horizon: int | None = None, fit_kws=None,
+                     n_origins: int = N_ORIGINS, horizon: int | None = None, fit_kws=None,
                      join: bool = True, holds=None,
                      progress: bool | None = None) -> ProcedureChoice:
     """Choose a library or procedure for ``model`` by forecasts inside ``x``.
@@ -121,7 +124,8 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
             default :func:`~discrepancy.selection.default_libraries` of the data and prior.
             The prior alone is always added (``"prior alone"``).
         outputs: what ``x`` measures (then every candidate is fitted by ``fit_outputs``).
-        n_origins: forecast origins (at least 2), from half of every record on.
+        n_origins: forecast origins (at least 2), from half of every record on (default
+            :data:`N_ORIGINS`).
         horizon: forecast length in samples (state fits; default a quarter of the shortest
             record; each window is scored until the prior's sensitivity to its initial state
             says forecasts stop meaning anything, as in the model's own selection).

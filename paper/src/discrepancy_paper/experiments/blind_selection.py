@@ -153,7 +153,8 @@ def disturbance_case(*, quick: bool, seed: int = 11):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         choice = dc.choose_procedure(model, [r[0] for r in train], t=DT,
-                                     u=[r[1] for r in train], n_origins=2 if quick else 3)
+                                     u=[r[1] for r in train],
+                                     **({"n_origins": 2} if quick else {}))
         old = dc.DiscrepancyModel(prior=prior, state_names=["q", "v"], input_names=["u"],
                                   feature_library=dc.PolynomialLibrary(3),
                                   selection="optimizer").fit(
