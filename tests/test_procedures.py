@@ -179,6 +179,11 @@ def test_procedure_figure_has_one_column_per_candidate(friction_records):
     fig = procedure_figure(choice)
     labels = [tick.get_text() for tick in fig.axes[0].get_xticklabels()]
     assert [label.split("\n")[0] for label in labels] == ["prior alone", "linear", "cubic"]
+    assert not fig.axes[0].texts
+    # a candidate whose forecasts diverged at two origins says so where its dots would be
+    choice.scores["cubic"]["forecast_errors"][:2] = [np.inf, np.nan]
+    texts = [text.get_text() for text in procedure_figure(choice).axes[0].texts]
+    assert texts == [f"diverged at\n2 of {len(choice.origins)}"]
 
 
 @pytest.mark.slow

@@ -84,7 +84,8 @@ def forecast_selection_figure(model, *, title: str = ""):
 def procedure_figure(choice, *, title: str = ""):
     """Every candidate of :func:`discrepancy.choose_procedure`: its forecast error at each
     origin (dots) and their mean with one standard error (bar), the chosen ringed and the
-    prior alone's mean as a dashed line."""
+    prior alone's mean as a dashed line; a candidate whose forecasts diverged at some
+    origins (no dot, no mean) says at how many, in red at the top."""
     if not hasattr(choice, "scores") or not hasattr(choice, "chosen"):
         from ..errors import ParameterError, describe
         raise ParameterError(f"choice must be what choose_procedure returns; got "
@@ -98,6 +99,10 @@ def procedure_figure(choice, *, title: str = ""):
         ax.errorbar(i, row["mean"], yerr=row["se"], fmt="o", color="tab:blue", capsize=3)
         if name == choice.chosen:
             ax.plot(i, row["mean"], "o", ms=14, mfc="none", mec="tab:red", mew=1.5)
+        diverged = int(np.sum(~np.isfinite(errors)))
+        if diverged:
+            ax.text(i, 0.97, f"diverged at\n{diverged} of {errors.size}", ha="center", va="top",
+                    transform=ax.get_xaxis_transform(), fontsize=7, color="tab:red")
     if "prior alone" in choice.scores:
         ax.axhline(choice.scores["prior alone"]["mean"], ls="--", color="0.3", lw=1,
                    label="prior alone")
