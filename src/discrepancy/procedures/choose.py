@@ -17,8 +17,9 @@ grows, the last forecast ends where the data end). The candidates are entered in
    straight line nor a step).
 
 The candidate with the best mean forecast over every round wins by the one-standard-error
-rule over the origins, the fewest terms first among ties, then the default input hold
-(another hold must forecast better by more than a standard error), then the smaller library
+rule over the origins, the fewest terms first among ties (the most that any origin's fit
+kept), then the default input hold (another hold must forecast better by more than a
+standard error), then the smaller library
 (a union whose terms all come from one of its parts is that part), and its whole procedure
 is run again on all the data. With outputs, its scored support (the fit the forecasts
 scored) is also refined on all the data, and taken instead when it fits them better with no
@@ -68,8 +69,9 @@ class ProcedureChoice:
     Attributes:
         chosen: name of the chosen candidate; model: it, fitted on all the data.
         scores: per candidate ``{"forecast_errors": [per origin], "mean", "se", "n_terms"
-            (fitted on the largest training part), "library_size" (its candidate terms, states x
-            features; 0 for the prior alone), "prior_only", "round"}``; errors are mean
+            (fitted on the largest training part), "n_terms_per_origin", "library_size" (its
+            candidate terms, states x features; 0 for the prior alone), "prior_only" (every
+            origin's fit was the prior alone), "round"}``; errors are mean
             scaled squared errors (each state or output divided by its standard deviation);
             ``round`` says where the candidate came from (``"given"``, ``"joined"`` or
             ``"input hold"``, module doc).
@@ -90,17 +92,22 @@ class ProcedureChoice:
 
     def table(self) -> str:
         """A text table, one line per candidate: its name, terms, mean forecast error (scaled
-        squared error) and standard error over the origins, the chosen one marked."""
+        squared error) and standard error over the origins, the chosen one marked; then
+        how many terms the chosen model, fitted on all the data, kept, and how it was
+        fitted."""
         lines = [f"{'candidate':<40} {'terms':>5} {'forecast error':>14} {'± s.e.':>9}"]
         for name, row in self.scores.items():
             mark = "  <- chosen" if name == self.chosen else ""
             lines.append(f"{name:<40} {row['n_terms']:>5} {row['mean']:>14.5g} "
                          f"{row['se']:>9.2g}{mark}")
-        return "\n".join([*lines, f"the chosen model: {self.final_route}"])
+        return "\n".join([*lines, f"the chosen model: {self.final_route}, "
+                                  f"{self.model.complexity} terms (the table's are of the "
+                                  "fit on the largest part)"])
 
 
 #: forecast origins by default, as the energy blind fit's: the one-standard-error rule needs
-#: a standard error, and three origins give it from two degrees of freedom
+#: a standard error, and three origins (the default before) gave it from two degrees of
+#: freedom
 N_ORIGINS = 5
 #: the name of the candidate that is the prior alone (always entered, first)
 PRIOR = "prior alone"
@@ -197,18 +204,19 @@ class _Contest:
         settings = self.fit_kws if settings is None else settings
         for name, template in tqdm(list(templates.items()), desc=f"procedures ({round_name})",
                                    disable=self.disable):
-            judge, errors = self.judge(settings), []
+            judge, errors, fits = self.judge(settings), [], []
             for f in self.fractions:
                 errors.append(judge.score(template, f))
-            last = judge.last
+                fits.append(judge.last)
+            terms = [0 if m is None else int(np.count_nonzero(m.coef_)) for m in fits]
+            corrected = [m for m in fits if m is not None and not m.prior_only_]
             self.scores[name] = {
                 "forecast_errors": errors, "mean": float(np.mean(errors)),
                 "se": float(np.std(errors, ddof=1) / np.sqrt(len(errors)))
                 if np.isfinite(errors).all() else float("nan"),
-                "n_terms": 0 if last is None else int(np.count_nonzero(last.coef_)),
-                "library_size": 0 if last is None or last.prior_only_
-                else int(last.coef_.size),
-                "prior_only": last is None or bool(last.prior_only_), "round": round_name}
+                "n_terms": terms[-1], "n_terms_per_origin": terms,
+                "library_size": int(corrected[0].coef_.size) if corrected else 0,
+                "prior_only": not corrected, "round": round_name}
             self.entries[name] = (template, settings)
 
     def pick(self) -> str:
@@ -220,10 +228,12 @@ class _Contest:
             raise ConvergenceError("every candidate's forecasts diverged on these data")
         mean = np.where(finite, mean, np.inf)
         margin = np.maximum(np.nan_to_num(se, nan=0.0), TOLERANCE * mean[finite].min())
-        # simplest first: fewest terms, then the default input hold, then the smaller
-        # library (a union that kept only one library's terms is that library), then the
-        # prior alone itself (a candidate whose fits fell back to it is no other model)
-        sizes = [(self.scores[k]["n_terms"],
+        # simplest first: fewest terms (the most any origin's fit kept: a candidate whose
+        # last fit fell back to the prior alone but whose earlier ones corrected it is not
+        # the prior alone), then the default input hold, then the smaller library (a union
+        # that kept only one library's terms is that library), then the prior alone itself
+        # (a candidate whose fits all fell back to it is no other model)
+        sizes = [(max(self.scores[k]["n_terms_per_origin"]),
                   self.entries[k][1].get("u_hold", DEFAULT_HOLD) != DEFAULT_HOLD,
                   self.scores[k]["library_size"], k != PRIOR)
                  for k in names]
