@@ -8,6 +8,7 @@ from sklearn.base import clone
 
 import discrepancy as dc
 from discrepancy.errors import NotFittedError, ParameterError, ShapeError
+from discrepancy.models.core.uncertainty import CoefficientUncertainty
 from discrepancy.symbolic import symbol
 
 x1, x2, u = symbol("x1"), symbol("x2"), symbol("u")
@@ -270,6 +271,21 @@ def test_equations_and_print(exact_model, capsys):
     out = capsys.readouterr().out.splitlines()
     assert out == ["(x1)' = prior", "(x2)' = prior + 0.400 x2 - 0.400 x1^2 x2"]
     assert exact_model.get_feature_names()[:4] == ["1", "x1", "x2", "x1^2"]
+
+
+def test_a_small_coefficient_is_printed_not_hidden(exact_model):
+    """A coefficient that rounds to 0 at the precision is shown with as many significant
+    digits (PySINDy leaves the term out: a 2e-4 u^2 with u of 300 adds 18 to the rate)."""
+    coef = exact_model.coef_.copy()
+    coef[0, 1] = -1.954e-4
+    small = exact_model.with_coefficients(coef)
+    assert small.equations()[0] == "prior - 1.95e-04 x1"
+    assert small.equations(precision=5)[0] == "prior - 0.00020 x1"
+    assert small.equations()[1] == "prior + 0.400 x2 - 0.400 x1^2 x2"
+    samples = coef + np.array([-3.1e-5, 3.1e-5])[:, None, None]   # std 4.38e-05
+    spread = CoefficientUncertainty(coef, samples, small.state_names_,
+                                    small.get_feature_names(), 1)
+    assert small.equations(uncertainty=spread)[0] == "prior - (1.95e-04 ± 4.38e-05) x1"
     assert exact_model.coefficients().shape == (2, 10)
 
 

@@ -94,7 +94,8 @@ def to_casadi(model, part=None):
 
 def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
     """Right-hand sides as text, e.g. ``prior + 0.400 x2 - 0.400 x1^2 x2``, one per state;
-    with ``uncertainty``, coefficients as ``(0.400 ± 0.004)``."""
+    with ``uncertainty``, coefficients as ``(0.400 ± 0.004)``. Every non-zero coefficient is
+    shown: one that rounds to 0 at ``precision`` decimals as ``1.95e-04``."""
 
     validate_params("equations", {"precision": precision},
                     {"precision": [Interval(Integral, 0, 16)]})
@@ -107,15 +108,25 @@ def equations(model, precision: int = 3, uncertainty=None) -> list[str]:
     for i, row in enumerate(model.coef_):
         parts = [] if model.prior is None else ["prior"]
         for j, (c, name) in enumerate(zip(row, names, strict=True)):
-            if round(c, precision) != 0:   # terms that print as 0 are left out, as in PySINDy
-                size = f"{abs(c):.{precision}f}"
+            if c != 0:
+                size = _number(abs(c), c, precision)
                 if std is not None:
-                    size = f"({size} ± {std[i, j]:.{precision}f})"
+                    size = f"({size} ± {_number(std[i, j], c, precision)})"
                 term = size + ("" if name == "1" else f" {name}")
                 parts.append(("- " if c < 0 else "+ ") + term if parts else
                              ("-" if c < 0 else "") + term)
         out.append(" ".join(parts) if parts else f"{0:.{precision}f}")
     return out
+
+
+def _number(value: float, coef: float, precision: int) -> str:
+    """``value`` with ``precision`` decimals, or, when the coefficient ``coef`` it belongs to
+    would print as 0 that way, with ``precision`` significant digits (``1.95e-04``): a small
+    coefficient of a large term (``u`` of hundreds of newtons) is not negligible, and PySINDy,
+    which leaves such terms out, hides them."""
+    if round(abs(coef), precision) != 0:
+        return f"{value:.{precision}f}"
+    return f"{value:.{max(precision - 1, 0)}e}"
 
 
 def choice_line(model) -> str:
