@@ -131,8 +131,8 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
             default :func:`~discrepancy.selection.default_libraries` of the data and prior.
             The prior alone is always added (``"prior alone"``).
         outputs: what ``x`` measures (then every candidate is fitted by ``fit_outputs``).
-        n_origins: forecast origins (at least 2), from half of every record on (default
-            :data:`N_ORIGINS`).
+        n_origins: forecast origins (at least 2), from half of every record on (default 5,
+            as the energy blind fit's).
         horizon: forecast length in samples (state fits; default a quarter of the shortest
             record; each window is scored until the prior's sensitivity to its initial state
             says forecasts stop meaning anything, as in the model's own selection).
