@@ -59,6 +59,15 @@ def test_the_prior_alone_fitted_on_purpose_estimates_only_initial_states():
     assert fitted.region_ is not None and fitted.region_.names == ("pos", "vel", "u")
 
 
+def test_refine_of_the_prior_alone_says_it_has_no_terms_to_refit():
+    u, x, y = record(0.1, 0.0)
+    alone = model(optimizer="prior_only").fit(x, t=T, u=u)
+    with pytest.warns(PriorOnlyWarning, match="has none .*fit_outputs"):
+        alone.refine(y, t=T, u=u, outputs=["pos"])
+    assert not np.any(alone.coef_)
+    np.testing.assert_allclose(alone.x0_, x[0], atol=0.02)     # the exact prior's start
+
+
 def test_prior_states_give_the_unmeasured_velocity_along_the_prior():
     """An exact prior with the position measured: its simulation from the fitted initial
     state recovers the velocity no output measures."""

@@ -86,6 +86,8 @@ class OutputErrorMethods:
         when the refit forecasts worse, the coefficients are kept (only the initial states
         are estimated) with a ``SelectionWarning``. ``refine_check_`` holds both held-out
         errors and the outcome (:func:`discrepancy.models.outputs.output_checks.check_refine`).
+        A model with no terms (the prior alone) has nothing to refit: its initial states
+        are estimated, with a ``PriorOnlyWarning`` that says so.
 
         Args:{common}
         """
@@ -93,6 +95,15 @@ class OutputErrorMethods:
         self.check_is_fitted()
         self._refuse_maps("refine")
         from .output_fit import refit_outputs
+
+        if not np.any(self.coef_):
+            import warnings
+
+            from ...errors import PriorOnlyWarning
+            warnings.warn("refine keeps a model's terms and this one has none (the prior "
+                          "alone): only its initial states are estimated. To let output error "
+                          "choose terms, use fit_outputs with a feature_library",
+                          PriorOnlyWarning, stacklevel=2)
 
         before = self.coef_.copy()
         coef, x0s, fit = refit_outputs(self, y, t, u, outputs=outputs, x0=x0,
