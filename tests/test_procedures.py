@@ -9,6 +9,7 @@ from scipy.integrate import solve_ivp
 
 import discrepancy as dc
 from discrepancy.selection.candidate_libraries import (
+    angle_states,
     default_libraries,
     friction_library,
     velocity_states,
@@ -152,6 +153,42 @@ def test_a_candidate_whose_last_fit_fell_back_to_the_prior_is_not_the_prior_alon
     assert -0.045 < coef[1][coef[1] != 0][0] < -0.015                   # truth -0.03
     assert choice.table().endswith("on all the data, 1 terms (the table's are of the fit on "
                                    "the largest part)")
+
+
+def test_angles_are_states_the_prior_sees_only_through_periodic_functions():
+    q, v, u = sp.symbols("q v u", real=True)
+    x = np.random.default_rng(0).uniform(-3, 3, (50, 2))
+    names = ["q", "v"]
+    assert angle_states([v, -8 * sp.sin(q) + sp.cos(2 * q) * v], names, [], x) == ["q"]
+    assert angle_states(lambda z, u=None: np.c_[z[:, 1], -np.sin(z[:, 0])], names, [],
+                        x) == ["q"]
+    assert angle_states([v, -sp.sin(q) - 0.5 * q], names, [], x) == []   # a torsion spring
+    assert angle_states([v, (1 - q ** 2) * v - q], names, [], x) == []
+    assert angle_states([v, -sp.sin(q) + sp.sin(u)], names, ["u"], x, x[:, :1]) == ["q"]
+    assert angle_states(None, names, [], x) == []
+
+
+def test_a_pendulum_going_over_the_top_gets_a_sine_not_powers_of_its_angle():
+    """Truth q'' = -9.81 sin q - 0.3 q', the prior's -8 sin q (a wrong length); started
+    fast enough to turn over several times. The trigonometric candidate forecasts 100 times
+    better than any polynomial one and finds the missing -1.81 sin q alone."""
+    t = np.arange(2001) * 0.01
+    x = solve_ivp(lambda s, z: [z[1], -9.81 * np.sin(z[0]) - 0.3 * z[1]], (0, t[-1]),
+                  [0.5, 9.0], t_eval=t, rtol=1e-10, atol=1e-12).y.T
+    x = x + 0.01 * np.random.default_rng(0).standard_normal(x.shape)
+    assert np.ptp(x[:, 0]) > 4 * np.pi
+    q, v = sp.symbols("q v", real=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        choice = dc.choose_procedure(dc.DiscrepancyModel(prior=[v, -8 * sp.sin(q) - 0.3 * v],
+                                                         state_names=["q", "v"]),
+                                     x, t=0.01, progress=False)
+    assert choice.chosen == "linear + trigonometric"
+    coef, names = choice.model.coef_, choice.model.get_feature_names()
+    assert np.count_nonzero(coef) == 1 and coef[1, names.index("sin(q)")] == \
+        pytest.approx(-1.81, rel=0.01)                                  # 9.81 - 8
+    polynomial = min(choice.scores[k]["mean"] for k in ("polynomial 2", "polynomial 3"))
+    assert choice.scores["linear + trigonometric"]["mean"] < polynomial / 100
 
 
 def test_velocity_like_states_come_from_the_prior():

@@ -16,7 +16,12 @@ exact sympy library (so a chosen model exports like any other):
 * square roots ``sign(z) sqrt(|z|)`` of every state and input that keeps one sign over
   the data, or has none (Torricelli outflow of a level, quadratic drag inverted): the root
   of a variable that crosses zero has an infinite slope there, which no physical law of
-  the kind needs and which makes output-error fits crawl.
+  the kind needs and which makes output-error fits crawl;
+* ``sin`` and ``cos`` of every angle, with the linear terms of the other variables: a
+  state is an angle when the prior sees it only through 2π-periodic functions (its values
+  on the data do not change when the state moves by 2π, and do when it moves by 1). A
+  pendulum's wrong length or a tilted mount is a multiple of ``sin q`` and ``cos q``; a
+  power of an angle that goes over the top extrapolates without bound.
 
 For output-error fits, states no output measures take their values along the prior's
 simulation (:func:`~discrepancy.models.outputs.output_checks.prior_states`), so their knots,
@@ -32,6 +37,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ShapeError
+from ..fitting.prior import Prior
 from ..libraries import CustomLibrary, PolynomialLibrary
 from ..symbolic import symbol
 
@@ -69,6 +75,42 @@ def velocity_states(prior, state_names, x, u=None) -> list[str]:
                                                           rtol=1e-9, atol=1e-12):
                 out.append(name)
     return out
+
+
+def angle_states(prior, state_names, input_names, x, u=None) -> list[str]:
+    """States the prior sees only through 2π-periodic functions (module doc), judged on the
+    first 200 rows of the data ``x`` ``(m, n)`` and ``u`` ``(m, r)``: the prior's values
+    equal to 1e-9 with the state moved by 2π and differ with it moved by 1."""
+    if prior is None:
+        return []
+    rows = np.asarray(x, float)[:min(len(x), 200)]
+    inputs = None if u is None else np.asarray(u, float)[:len(rows)]
+    try:
+        model = Prior(prior, state_names, input_names)
+        with np.errstate(all="ignore"):
+            base = model.unchecked(rows, inputs)
+            moved = [[model.unchecked(_moved(rows, j, shift), inputs)
+                      for shift in (2 * np.pi, 1.0)] for j in range(len(state_names))]
+    except Exception:          # a prior that cannot be evaluated here names no angle
+        return []
+    finite = np.isfinite(base)
+    return [name for name, (turn, step) in zip(state_names, moved, strict=True)
+            if np.allclose(turn[finite], base[finite], rtol=1e-9, atol=1e-12)
+            and not np.allclose(step[finite], base[finite], rtol=1e-9, atol=1e-12)]
+
+
+def _moved(rows, j, shift):
+    out = rows.copy()
+    out[:, j] += shift
+    return out
+
+
+def trigonometric_library(angles, others) -> CustomLibrary | PolynomialLibrary:
+    """``sin`` and ``cos`` of each angle with the linear terms (and a constant) of the
+    ``others`` variables."""
+    trig = CustomLibrary([f(symbol(a)) for a in angles for f in (sp.sin, sp.cos)])
+    return PolynomialLibrary(1, variables=list(others)) + trig if others else \
+        CustomLibrary([sp.Integer(1)]) + trig
 
 
 def friction_library(velocities: dict[str, np.ndarray]) -> CustomLibrary | None:
@@ -136,4 +178,8 @@ def default_libraries(state_names, input_names, x: np.ndarray, u: np.ndarray | N
         quadratic = PolynomialLibrary(2) + root_library(signed) if signed else \
             PolynomialLibrary(2)
         out["polynomial 2 + roots + hinges"] = quadratic + hinge_library(data)
+    angles = angle_states(prior, state_names, input_names, x, u)
+    if angles:
+        out["linear + trigonometric"] = trigonometric_library(
+            angles, [n for n in names if n not in angles])
     return out
