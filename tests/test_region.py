@@ -5,6 +5,7 @@ import warnings
 
 import numpy as np
 import pytest
+import sympy as sp
 
 import discrepancy as dc
 from discrepancy.errors import ExtrapolationWarning
@@ -57,11 +58,40 @@ def test_inputs_are_guarded_too(helpers):
     f = lambda x, u: np.c_[x[:, 1], -x[:, 0] - 0.3 * x[:, 1] + u[:, 0]]   # noqa: E731
     x = helpers.integrate(lambda z, v: f(z[None], np.atleast_2d(v))[0], [0.0, 0.0], t,
                           u=lambda s: np.array([np.sin(0.7 * s)]))
-    model = dc.DiscrepancyModel(prior=lambda x, u: np.c_[x[:, 1], -x[:, 0] + u[:, 0]],
+    model = dc.DiscrepancyModel(prior=lambda x, u: np.c_[x[:, 1], -x[:, 0] + 0.5 * u[:, 0]],
                                 feature_library=dc.PolynomialLibrary(1)).fit(x, t=0.01, u=u)
     assert model.region_.names == ("x1", "x2", "u")
+    assert model.equations()[1] == "prior - 0.300 x2 + 0.500 u"    # the truth's
     with pytest.warns(ExtrapolationWarning, match=r"u reached 3, 2 above"):
         model.predict(x[:5], 3 * np.ones((5, 1)))
+
+
+def test_only_variables_the_learned_terms_use_are_watched(helpers):
+    """The learned terms are the user's prior's correction: a variable none of them uses,
+    or one they see through sin and cos only (an angle that turns over), is not
+    extrapolated anywhere."""
+    from discrepancy.models.simulate.region import watched_names
+
+    q, v, u = (dc.symbolic.symbol(n) for n in ("q", "v", "u"))
+    names = ("q", "v", "u")
+    assert watched_names([v, v ** 3], names) == ("v",)
+    assert watched_names([sp.sin(q), sp.cos(2 * q) * v], names) == ("v",)
+    assert watched_names([sp.sin(q), q * v], names) == ("q", "v")
+    assert watched_names([sp.sin(q / 2)], names) == ("q",)            # period 4 pi
+    t = np.arange(2001) * 0.01
+    x = helpers.integrate(lambda z, _: np.array([z[1], -9.81 * np.sin(z[0]) - 0.3 * z[1]]),
+                          [0.5, 9.0], t)
+    assert np.ptp(x[:, 0]) > 4 * np.pi                                 # turns over
+    model = dc.DiscrepancyModel(
+        prior=[v, -8 * sp.sin(q)], state_names=["q", "v"],
+        feature_library=dc.CustomLibrary([sp.sin(q), sp.cos(q), v])).fit(x, t=0.01)
+    assert model.equations()[1] == "prior - 1.810 sin(q) - 0.300 v"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model.predict(np.array([[100.0, 0.0]]))                      # q far outside
+    with pytest.warns(ExtrapolationWarning, match="v reached 30") as caught:
+        model.predict(np.array([[100.0, 30.0]]))
+    assert "q reached" not in str(caught[0].message)
 
 
 def test_the_region_is_saved_and_loaded_and_old_files_still_load(fitted, tmp_path, helpers):

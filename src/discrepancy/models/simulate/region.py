@@ -6,8 +6,10 @@ every state and input the fit saw; :meth:`FittedRegion.warn_outside` is called b
 ``simulate``, ``predict`` and ``predict_ahead`` and warns once per call
 (:class:`~discrepancy.errors.ExtrapolationWarning`) naming each variable that left the
 range, how far and in which direction. Excursions within :data:`MARGIN` of a variable's
-range are not reported (the range itself is a noisy estimate). A model without learned
-terms (the prior alone) has nothing to extrapolate and never warns.
+range are not reported (the range itself is a noisy estimate). Only the variables the
+learned terms depend on are watched, less those every such term sees through 2π-periodic
+functions (``sin(q)`` of an angle that turns over is known everywhere): the prior is the
+user's, and a model without learned terms (the prior alone) never warns.
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+import sympy as sp
 
 from ...errors import ExtrapolationWarning
 
@@ -35,16 +38,18 @@ class FittedRegion:
     low: np.ndarray
     high: np.ndarray
 
-    def excursions(self, z: np.ndarray) -> list[tuple[str, float, float]]:
+    def excursions(self, z: np.ndarray, only=None) -> list[tuple[str, float, float]]:
         """``(name, extreme value reached, distance outside)`` of the variables (columns of
-        ``z``: the first ``z.shape[1]`` variables) that leave the range by more than
-        :data:`MARGIN` of it."""
+        ``z``: the first ``z.shape[1]`` variables; of them ``only`` those named, when given)
+        that leave the range by more than :data:`MARGIN` of it."""
         out = []
         width = self.high - self.low
         tol = MARGIN * np.where(width > 0, width, np.maximum(np.abs(self.high), 1.0))
         with np.errstate(invalid="ignore"):
             top, bottom = np.nanmax(z, axis=0), np.nanmin(z, axis=0)
         for j, name in enumerate(self.names[:z.shape[1]]):
+            if only is not None and name not in only:
+                continue
             above, below = top[j] - self.high[j], self.low[j] - bottom[j]
             if above > tol[j] and above >= below:
                 out.append((name, float(top[j]), float(above)))
@@ -52,12 +57,13 @@ class FittedRegion:
                 out.append((name, float(bottom[j]), -float(below)))
         return out
 
-    def warn_outside(self, z: np.ndarray, where: str, *, stacklevel: int = 3) -> None:
-        """One ExtrapolationWarning listing every variable of ``z`` ``(m, v)`` that left
-        the range (nothing when none did)."""
+    def warn_outside(self, z: np.ndarray, where: str, *, only=None,
+                     stacklevel: int = 3) -> None:
+        """One ExtrapolationWarning listing every variable of ``z`` ``(m, v)`` (of them
+        ``only`` those named, when given) that left the range (nothing when none did)."""
         if z.size == 0:
             return
-        found = self.excursions(z)
+        found = self.excursions(z, only)
         if not found:
             return
         parts = []
@@ -101,9 +107,33 @@ class FittedRegion:
 
 def guard(model, z: np.ndarray, where: str, stacklevel: int = 4) -> None:
     """Warn (once per call) when ``z`` = ``[x, u]`` (or its first columns) given to a
-    fitted model leaves its region."""
+    fitted model leaves its region where its learned terms depend on it."""
     if model.region_ is not None and not model.prior_only_:
-        model.region_.warn_outside(z, where, stacklevel=stacklevel)
+        model.region_.warn_outside(z, where, only=_watched(model), stacklevel=stacklevel)
+
+
+def _watched(model) -> tuple:
+    """:func:`watched_names` of the model's active terms, kept while its support stays."""
+    support = np.any(np.asarray(model.coef_) != 0, axis=0)
+    key = support.tobytes()
+    kept = getattr(model, "_watched_names", None)
+    if kept is None or kept[0] != key:
+        terms = [e for e, on in zip(model.feature_expressions_, support, strict=True) if on]
+        kept = (key, watched_names(terms, model.region_.names))
+        model._watched_names = kept
+    return kept[1]
+
+
+def watched_names(terms, names) -> tuple:
+    """The variables ``names`` that the sympy expressions ``terms`` depend on, less those
+    every term using them sees through 2π-periodic functions (``sin(q)``, ``cos(2 q)``:
+    unchanged, as sympy evaluates it, when ``q`` moves by 2π)."""
+    out = []
+    for name in names:
+        using = [(e, s) for e in terms for s in e.free_symbols if s.name == name]
+        if any(e.subs(s, s + 2 * sp.pi) != e for e, s in using):
+            out.append(name)
+    return tuple(out)
 
 
 def guard_run(model, states: np.ndarray, u, where: str) -> None:
