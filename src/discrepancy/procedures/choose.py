@@ -21,9 +21,11 @@ rule over the origins, the fewest terms first among ties (the most that any orig
 kept), then the default input hold (another hold must forecast better by more than a
 standard error), then the smaller library
 (a union whose terms all come from one of its parts is that part), and its whole procedure
-is run again on all the data. With outputs, its scored support (the fit the forecasts
-scored) is also refined on all the data, and taken instead when it fits them better with no
-more terms (``final_route`` says which). Nothing but the data given is read, so a test record
+is run again on all the data. With states, when that keeps more terms than any fit the
+forecasts scored, the scored support (of the fit on the largest part) is refitted on all the
+data instead. With outputs, its scored support (the fit the forecasts scored) is also
+refined on all the data, and taken instead when it fits them better with no more terms
+(``final_route`` says which). Nothing but the data given is read, so a test record
 kept apart stays unseen.
 
 Forecasts: with every state measured (``fit``), from the state at the origin over the
@@ -170,7 +172,7 @@ def choose_procedure(model, x, t=None, *, u=None, candidates=None, outputs=None,
                               "input hold", {**fit_kws, "u_hold": hold})
     pick = contest.pick()
     template, settings = contest.entries[pick]
-    final, route = contest.judge(settings).final(template)
+    final, route = contest.judge(settings).final(template, contest.supports[pick])
     if pick == PRIOR:
         warnings.warn("no candidate forecast better than the prior alone inside the data "
                       "given: the model is the prior alone (choice.model.prior_only_ is True; "
@@ -188,7 +190,7 @@ class _Contest:
         self.records, self.outputs, self.fit_kws = records, outputs, fit_kws
         self.horizon, self.fractions = horizon, fractions
         self.disable = None if progress is None else not progress
-        self.entries, self.scores, self._judges = {}, {}, {}
+        self.entries, self.scores, self.supports, self._judges = {}, {}, {}, {}
 
     def judge(self, settings):
         key = settings.get("u_hold")
@@ -218,6 +220,7 @@ class _Contest:
                 "library_size": int(corrected[0].coef_.size) if corrected else 0,
                 "prior_only": not corrected, "round": round_name}
             self.entries[name] = (template, settings)
+            self.supports[name] = [None if m is None else m.coef_ != 0 for m in fits]
 
     def pick(self) -> str:
         names = list(self.scores)

@@ -20,6 +20,10 @@ FIRST_ORIGIN = 0.5
 HORIZON_SHARE = 0.25
 #: how :meth:`Judge.final` fits the chosen candidate on all the data
 WHOLE = "its whole procedure on all the data"
+#: how :meth:`StateForecasts.final` made the chosen model when not by :data:`WHOLE`
+SCORED_SUPPORT = ("its scored support (the fit on the largest part) refitted on all the "
+                  "data: the whole procedure kept more terms than any fit the forecasts "
+                  "scored")
 
 
 class Judge:
@@ -33,8 +37,9 @@ class Judge:
         data = np.vstack([r.x for r in records])
         self.scale = np.where(data.std(axis=0) > 0, data.std(axis=0), 1.0)
 
-    def final(self, template):
-        """``(model, route)``: ``template`` fitted on all the data, and how."""
+    def final(self, template, supports=None):
+        """``(model, route)``: ``template`` fitted on all the data, and how (``supports``:
+        the scored fits' supports, one per origin, ``None`` where there was none)."""
         return self.fit(template, 1.0), WHOLE
 
     def fit(self, template, fraction):
@@ -56,6 +61,20 @@ class StateForecasts(Judge):
 
     def _fit(self, model, x, t, u):
         return model.fit(x, t=t, u=u, **self.fit_kws)
+
+    def final(self, template, supports=None):
+        """``(model, route)``: ``template``'s whole procedure on all the data; or, when that
+        kept more terms than any fit the forecasts scored (``supports``, one per origin),
+        the support of the fit on the largest part refitted on all the data: a procedure
+        scored by sparse fits must not hand back terms nobody scored (a union of libraries
+        whose fits kept one sine each came back with five terms, powers of an angle among
+        them)."""
+        whole = self.fit(template, 1.0)
+        kept = [s for s in supports or [] if s is not None]
+        if not kept or np.count_nonzero(whole.coef_) <= max(map(np.count_nonzero, kept)):
+            return whole, WHOLE
+        refitted = _refitted_on(whole, kept[-1])
+        return (whole, WHOLE) if refitted is None else (refitted, SCORED_SUPPORT)
 
     def score(self, template, fraction) -> float:
         """Mean scaled squared forecast error of ``template`` fitted up to the origin at
@@ -85,6 +104,21 @@ class StateForecasts(Judge):
         if not windows:
             raise DataError("the records are too short to forecast from the origins")
         return windows
+
+
+def _refitted_on(model, support):
+    """``model`` with the coefficients of ``support`` ``(n, p)`` fitted on its own data
+    (its statistics, constraints and ridge; ``None`` when it kept no statistics)."""
+    from ..selection.candidates import FoldFits
+
+    stats = model.statistics_
+    if stats is None or np.shape(support) != model.coef_.shape:
+        return None
+    optimizer = model.optimizer_
+    alpha = 0.0 if getattr(optimizer, "unbias", True) else getattr(optimizer, "alpha", 0.0)
+    constraints = getattr(model.setup_.optimizer, "constraints", None)
+    return model.with_coefficients(FoldFits(stats, constraints, alpha).coefficients(
+        np.asarray(support, bool), None))
 
 
 def head(record, fraction):

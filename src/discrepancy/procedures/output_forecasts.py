@@ -61,7 +61,7 @@ class OutputForecasts(Judge):
         except ConvergenceError:   # its first model diverges on these data: start afresh
             return super().fit(template, fraction)
 
-    def final(self, template):
+    def final(self, template, supports=None):
         """``(model, route)``: ``template``'s whole procedure on all the data; or, when its
         scored support (the fit at the first origin) refined on all the data fits them
         better with no more terms, that (the whole procedure's search stopped in a poorer
