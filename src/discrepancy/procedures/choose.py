@@ -210,7 +210,8 @@ class _Contest:
             for f in self.fractions:
                 errors.append(judge.score(template, f))
                 fits.append(judge.last)
-            terms = [0 if m is None else int(np.count_nonzero(m.coef_)) for m in fits]
+            supports = [None if m is None else m.coef_ != 0 for m in fits]
+            terms = [0 if s is None else int(s.sum()) for s in supports]
             corrected = [m for m in fits if m is not None and not m.prior_only_]
             self.scores[name] = {
                 "forecast_errors": errors, "mean": float(np.mean(errors)),
@@ -220,7 +221,7 @@ class _Contest:
                 "library_size": int(corrected[0].coef_.size) if corrected else 0,
                 "prior_only": not corrected, "round": round_name}
             self.entries[name] = (template, settings)
-            self.supports[name] = [None if m is None else m.coef_ != 0 for m in fits]
+            self.supports[name] = supports
 
     def pick(self) -> str:
         names = list(self.scores)
